@@ -1,0 +1,27 @@
+// The mpsfsi subcommands behind the command-line parser.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mpsfsi {
+
+struct RunOptions {
+  std::string case_file;
+  std::optional<double> end_time;
+  std::optional<double> dp;
+  std::optional<std::string> subcycles;
+  std::string output;
+  std::vector<std::string> overrides;
+  bool overwrite = false;
+  bool quiet = false;
+
+  /// The command-line shortcuts (--end-time, --dp, --subcycles) as --set overrides, then the --set ones.
+  std::vector<std::string> all_overrides() const;
+};
+
+int command_check(const RunOptions& opts);
+int command_run(const RunOptions& opts);
+
+}  // namespace mpsfsi

@@ -1,0 +1,35 @@
+// Particle geometry on a square lattice of spacing dp: filled rectangles, box walls and blocks made of
+// one wall layer plus dummy layers (seed 004 §4.3). A rectangle of n x m cells of side dp gets one
+// particle at the centre of each cell, so bodies that touch along an edge sit exactly dp apart and
+// never overlap.
+#pragma once
+
+#include "core/types.hpp"
+
+#include <vector>
+
+namespace mpsfsi {
+
+/// Number of lattice cells that fit a length: round(length / dp), at least 1. Throws
+/// std::invalid_argument when length or dp is not positive.
+int lattice_cells(Real length, Real dp);
+
+/// Particle centres filling the rectangle [lo, hi]: lo + (i + 1/2, j + 1/2) dp for
+/// i < lattice_cells(hi_x - lo_x), j < lattice_cells(hi_y - lo_y), row by row.
+std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, Real dp);
+
+/// A lattice point and whether it belongs to the wall layer (true) or a dummy layer (false).
+struct WallPoint {
+  Vec x;
+  bool is_wall;
+};
+
+/// Walls of a box whose inner (wetted) rectangle is [lo, hi]: one wall layer and n_dummy dummy layers
+/// outside it, corners included. With open_top the top side has no lid (side walls reach hi_y).
+std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, Real dp, bool open_top, int n_dummy = 2);
+
+/// A solid block [lo, hi] made of wall particles: the outer layer is wall, the next n_dummy layers are
+/// dummy; deeper particles are not needed by the kernel and are left out.
+std::vector<WallPoint> block_walls(const Vec& lo, const Vec& hi, Real dp, int n_dummy = 2);
+
+}  // namespace mpsfsi

@@ -1,0 +1,77 @@
+// Structure-of-arrays particle storage. Every particle has position, velocity, kind, body,
+// material, a clamp flag and a global id; physics modules register extra named per-particle
+// fields (pressure, rotation angle, ...) that are stored, reordered and written out with the rest.
+#pragma once
+
+#include "core/types.hpp"
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace mpsfsi {
+
+/// What a particle is. Wall particles take part in the pressure solve, dummy particles only fill
+/// the kernel support behind a wall (seed 004 §4.3).
+enum class ParticleKind : std::uint8_t { fluid = 0, wall = 1, dummy = 2, solid = 3 };
+
+const char* to_string(ParticleKind kind);
+
+/// One body of the scene (a fluid column, an elastic plate, a tank wall, ...).
+struct BodyInfo {
+  std::string name;
+  ParticleKind kind = ParticleKind::fluid;  ///< kind of most of its particles (walls: wall)
+  int material = -1;                        ///< index into the case's materials; -1 for walls
+};
+
+class ParticleSet {
+ public:
+  // Core state, one entry per particle.
+  std::vector<Vec> position;
+  std::vector<Vec> velocity;
+  std::vector<ParticleKind> kind;
+  std::vector<std::uint16_t> body;      ///< index into bodies
+  std::vector<std::int16_t> material;   ///< index into the case's materials, -1 for walls
+  std::vector<std::uint8_t> clamped;    ///< 1: displacement held at zero
+  std::vector<GlobalId> global_id;
+
+  std::vector<BodyInfo> bodies;
+
+  std::size_t size() const { return position.size(); }
+  std::size_t n_of_kind(ParticleKind k) const;
+
+  /// Append one particle; the extra fields get their default value. Returns its local index.
+  LocalIndex add(const Vec& x, const Vec& v, ParticleKind k, int body_index, int material_index,
+                 bool is_clamped = false);
+  void reserve(std::size_t n);
+
+  /// Register an extra per-particle field (idempotent). References stay valid while fields are added.
+  std::vector<Real>& add_scalar_field(const std::string& name, Real initial = 0);
+  std::vector<Vec>& add_vector_field(const std::string& name, const Vec& initial = Vec::Zero());
+  bool has_scalar_field(const std::string& name) const { return scalar_fields_.count(name) != 0; }
+  bool has_vector_field(const std::string& name) const { return vector_fields_.count(name) != 0; }
+  /// Access a registered field; throws std::out_of_range naming the field if it does not exist.
+  std::vector<Real>& scalar_field(const std::string& name);
+  const std::vector<Real>& scalar_field(const std::string& name) const;
+  std::vector<Vec>& vector_field(const std::string& name);
+  const std::vector<Vec>& vector_field(const std::string& name) const;
+  const std::map<std::string, std::vector<Real>>& scalar_fields() const { return scalar_fields_; }
+  const std::map<std::string, std::vector<Vec>>& vector_fields() const { return vector_fields_; }
+
+  /// Reorder every array: new particle k is old particle order[k]. `order` is a permutation.
+  void reorder(const std::vector<LocalIndex>& order);
+  /// Remove the particles with remove[i] != 0, keeping the order of the rest. Returns the count.
+  std::size_t remove_if(const std::vector<std::uint8_t>& remove);
+
+  /// Bytes held by the particle arrays (for the memory estimate).
+  std::size_t memory_bytes() const;
+
+ private:
+  std::map<std::string, std::vector<Real>> scalar_fields_;
+  std::map<std::string, std::vector<Vec>> vector_fields_;
+  std::map<std::string, Real> scalar_defaults_;
+  std::map<std::string, Vec> vector_defaults_;
+};
+
+}  // namespace mpsfsi

@@ -1,0 +1,156 @@
+// The in-memory form of a case file (cases/*.yaml), checked and in SI units. The parser
+// (io/case_file.cpp) fills it; scene building, the fluid, the solid and the coupling read it.
+// The schema is documented in docs/case-format.md.
+#pragma once
+
+#include "core/types.hpp"
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mpsfsi {
+
+/// An error in user input (case file or command line). Exit code 2.
+class CaseError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Axis-aligned rectangle [lo, hi].
+struct Rect {
+  Vec lo = Vec::Zero();
+  Vec hi = Vec::Zero();
+  Vec size() const { return hi - lo; }
+  bool contains(const Vec& x) const { return (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all(); }
+};
+
+/// True when the interiors of a and b intersect (touching edges do not overlap).
+inline bool overlaps(const Rect& a, const Rect& b) {
+  return (a.lo.array() < b.hi.array()).all() && (b.lo.array() < a.hi.array()).all();
+}
+
+struct FluidMaterial {
+  std::string name;
+  Real rho = 1000;    ///< density [kg/m3]
+  Real nu = 1e-6;     ///< kinematic viscosity [m2/s]
+  Real c = 20;        ///< sound speed of the weak-compressibility term alpha = 1/(rho c^2) [m/s]
+  Real kappa = 0.2;   ///< relaxation of the PPE source term (seed 004 eq. 23)
+};
+
+struct SolidMaterial {
+  std::string name;
+  Real rho = 1000;    ///< density [kg/m3]
+  Real E = 1e6;       ///< Young's modulus [Pa]
+  Real nu = 0.3;      ///< Poisson's ratio
+  std::optional<Real> fracture_strain;  ///< eps_max of seed 004 eq. 47; none: unbreakable
+};
+
+enum class BodyKind { fluid, solid };
+
+struct BodySpec {
+  std::string name;
+  BodyKind kind = BodyKind::fluid;
+  std::string material;             ///< name of a fluid material (fluid) or solid material (solid)
+  Rect rect;                        ///< region filled with particles
+  std::optional<Rect> clamp;        ///< solid only: particles inside are clamped
+  Vec velocity = Vec::Zero();       ///< initial velocity [m/s]
+  Real angular_velocity = 0;        ///< initial angular velocity about the body's centroid [rad/s]
+};
+
+enum class WallType { box, block };
+
+struct WallSpec {
+  std::string name;
+  WallType type = WallType::box;
+  Rect rect;              ///< box: the inner (wetted) rectangle; block: the solid block itself
+  bool open_top = true;   ///< box only: no lid
+};
+
+enum class TankMotionType { none, sine_roll, table };
+
+struct TankMotionSpec {
+  TankMotionType type = TankMotionType::none;
+  Vec pivot = Vec::Zero();      ///< rotation centre [m]
+  Real amplitude = 0;           ///< sine_roll: amplitude [rad] (case file in degrees)
+  Real period = 1;              ///< sine_roll: period [s]
+  std::string file;             ///< table: CSV of time [s], angle [deg], resolved relative to the case file
+};
+
+enum class ProbeType { pressure, surge_front, column_height, displacement };
+
+struct ProbeSpec {
+  std::string name;
+  ProbeType type = ProbeType::pressure;
+  Vec position = Vec::Zero();   ///< pressure: probe point; displacement: initial point on the body
+  std::string body;             ///< displacement: which body (optional for others)
+};
+
+struct TimeSpec {
+  Real end = 1;                 ///< end time [s]
+  std::optional<Real> dt;       ///< fixed fluid time step [s], or
+  std::optional<Real> cfl;      ///< Courant number C of seed 004 eq. 52 (adaptive dt)
+  Real dt_max = 1e-3;           ///< upper bound of an adaptive dt [s]
+};
+
+struct CouplingSpec {
+  int subcycles = 1;            ///< solid sub-steps per fluid step; 0 means "auto"
+};
+
+struct FluidNumerics {
+  Real re_gradient = 2.1;       ///< effective radius for density/gradient, in units of dp
+  Real re_laplacian = 4.0;      ///< effective radius for the Laplacian, in units of dp
+  Real beta1 = 0.97;            ///< free surface: n_i < beta1 n0 ...
+  Real beta2 = 0.85;            ///< ... and N_i < beta2 N0
+  std::string gradient = "min_pressure";  ///< min_pressure | corrected
+  std::string solver = "cg";              ///< cg | gmres
+  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | none
+  Real tolerance = 1e-8;                  ///< relative residual of the pressure solve
+  int max_iterations = 500;
+};
+
+struct SolidNumerics {
+  Real re = 2.1;                ///< effective radius of the bonds, in units of dp
+  std::optional<Real> dt;       ///< solid time step for solid-only runs [s]
+};
+
+struct OutputSpec {
+  Real interval = 0.01;         ///< simulated time between frames [s]
+  std::vector<std::string> fields;  ///< empty: every field
+};
+
+struct CaseSpec {
+  std::string file;             ///< path of the case file as given
+  std::string name;
+  std::string description;
+  std::string source;           ///< where the geometry and data come from
+  Rect domain;                  ///< particles leaving it are removed and counted
+  Real dp = 0;                  ///< particle spacing l0 [m]
+  TimeSpec time;
+  Vec gravity = Vec::Zero();
+  std::vector<FluidMaterial> fluid_materials;
+  std::vector<SolidMaterial> solid_materials;
+  std::vector<BodySpec> bodies;
+  std::vector<WallSpec> walls;
+  TankMotionSpec tank_motion;
+  CouplingSpec coupling;
+  FluidNumerics fluid;
+  SolidNumerics solid;
+  std::vector<ProbeSpec> probes;
+  OutputSpec output;
+  std::string resolved_yaml;    ///< the case after every override, as YAML (saved with the results)
+
+  /// Index of a fluid/solid material by name, or -1.
+  int fluid_material_index(const std::string& name) const;
+  int solid_material_index(const std::string& name) const;
+};
+
+/// Parse and check a case file; `overrides` are "dotted.key=value" strings (--set), applied before
+/// checking. Throws CaseError with file, line, key and the expected form on any bad input.
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+/// Same, from YAML text (`name` stands for the file in messages).
+CaseSpec parse_case(const std::string& yaml_text, const std::string& name,
+                    const std::vector<std::string>& overrides = {});
+
+}  // namespace mpsfsi

@@ -1,0 +1,74 @@
+// Unit tests of the lattice geometry: filled rectangles, box walls, wall blocks.
+#include "core/geometry.hpp"
+#include "core/neighbours.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace mpsfsi;
+
+namespace {
+/// Smallest distance between any two points (via the neighbour search).
+Real min_spacing(const std::vector<Vec>& x, const Real probe) {
+  NeighbourList nl;
+  build_neighbour_list(x, probe, nl);
+  Real d = probe;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) d = std::min(d, (x[nl.index[k]] - x[i]).norm());
+  return d;
+}
+}  // namespace
+
+TEST(Geometry, FillRectangleExactLattice) {
+  const Real dp = 0.002;
+  const auto x = fill_rectangle(Vec(0.1, 0.0), Vec(0.146, 0.292), dp);
+  EXPECT_EQ(x.size(), 23u * 146u);
+  EXPECT_DOUBLE_EQ(x.front()[0], 0.1 + 0.5 * dp);
+  EXPECT_DOUBLE_EQ(x.front()[1], 0.5 * dp);
+  EXPECT_DOUBLE_EQ(x.back()[0], 0.1 + 22.5 * dp);
+  EXPECT_DOUBLE_EQ(x.back()[1], 145.5 * dp);
+  EXPECT_NEAR(min_spacing(x, 2 * dp), dp, 1e-15);
+}
+
+TEST(Geometry, LatticeCellsRoundsAndRejectsBadInput) {
+  EXPECT_EQ(lattice_cells(0.146, 0.0016), 91);  // 91.25 -> 91
+  EXPECT_EQ(lattice_cells(1e-9, 1.0), 1);
+  EXPECT_THROW(lattice_cells(1.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(lattice_cells(-1.0, 0.1), std::invalid_argument);
+}
+
+TEST(Geometry, OpenBoxWallsHaveOneWallAndTwoDummyLayers) {
+  const Real dp = 0.01;
+  const int nx = 20, ny = 10;
+  const auto w = box_walls(Vec(0, 0), Vec(nx * dp, ny * dp), dp, true);
+  std::size_t n_wall = 0, n_dummy = 0;
+  for (const auto& p : w) {
+    (p.is_wall ? n_wall : n_dummy) += 1;
+    // Nothing inside the box.
+    EXPECT_FALSE(p.x[0] > 0 && p.x[0] < nx * dp && p.x[1] > 0) << p.x.transpose();
+  }
+  // Wall layer: floor (nx + 2 corners) + two sides of height ny.
+  EXPECT_EQ(n_wall, static_cast<std::size_t>(nx + 2 + 2 * ny));
+  // Dummy layers 2 and 3: floor rows (nx + 4) + (nx + 6), side columns 2 * 2 * (ny + 1) + 2 * 2 * (ny + 2) ... counted directly:
+  EXPECT_EQ(n_dummy, static_cast<std::size_t>((nx + 4) + (nx + 6) + 2 * (ny + 1) + 2 * (ny + 2)));
+  // The fluid that fills the box sits exactly dp from the wall layer, never closer.
+  auto all = fill_rectangle(Vec(0, 0), Vec(nx * dp, ny * dp), dp);
+  for (const auto& p : w) all.push_back(p.x);
+  EXPECT_NEAR(min_spacing(all, 2 * dp), dp, 1e-15);
+}
+
+TEST(Geometry, ClosedBoxHasALid) {
+  const Real dp = 0.01;
+  const auto open = box_walls(Vec(0, 0), Vec(0.1, 0.1), dp, true);
+  const auto closed = box_walls(Vec(0, 0), Vec(0.1, 0.1), dp, false);
+  // The lid adds 3 full rows of the widened box (16 particles each) minus the side columns already there.
+  EXPECT_EQ(closed.size() - open.size(), 3u * 16u);
+}
+
+TEST(Geometry, BlockKeepsOuterWallAndTwoDummyLayers) {
+  const Real dp = 0.001;
+  const auto b = block_walls(Vec(0, 0), Vec(0.024, 0.048), dp);  // 24 x 48 cells
+  std::size_t n_wall = 0;
+  for (const auto& p : b) n_wall += p.is_wall;
+  EXPECT_EQ(n_wall, static_cast<std::size_t>(2 * 24 + 2 * 48 - 4));
+  EXPECT_EQ(b.size(), static_cast<std::size_t>(24 * 48 - 18 * 42));  // the core deeper than 3 layers is left out
+}
