@@ -7,7 +7,12 @@
 
 #include <fmt/format.h>
 
+#include "coupling/simulation.hpp"
+
+#include <mpi.h>
+
 #include <filesystem>
+#include <fstream>
 
 namespace mpsfsi {
 
@@ -42,15 +47,37 @@ int command_check(const RunOptions& opts) {
   return 0;
 }
 
-int command_run(const RunOptions& opts) {
+int command_run(const RunOptions& opts, const std::string& command_line) {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   const CaseSpec spec = load_case(opts.case_file, opts.all_overrides());
-  const Scene scene = build_scene(spec);
+  Scene scene = build_scene(spec);
   const std::string out = opts.output.empty() ? "out/" + spec.name : opts.output;
-  VtkSeriesWriter writer(out, "particles");
-  writer.write(scene.particles, 0.0);
-  fmt::print(stderr, "mpsfsi: time stepping is not available yet in this build (initial frame written to {})\n",
-             writer.pvd_path());
-  return 1;
+  namespace fs = std::filesystem;
+  if (rank == 0) {
+    if (fs::exists(out) && !fs::is_empty(out) && !opts.overwrite)
+      throw CaseError(fmt::format("--output {}: the folder exists and is not empty; choose another or pass --overwrite", out));
+    fs::create_directories(out);
+    std::ofstream(out + "/case.resolved.yaml") << spec.resolved_yaml << "\n";
+    std::ofstream(out + "/command.txt") << command_line << "\n";
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  RunSettings settings;
+  settings.output_dir = out;
+  settings.quiet = opts.quiet;
+  if (rank == 0 && !opts.quiet)
+    fmt::print("mpsfsi {}: case {} ({} particles), end time {:g} s, output {}\n", MPSFSI_VERSION, spec.name,
+               scene.particles.size(), spec.time.end, out);
+  try {
+    const RunSummary s = run_case(spec, std::move(scene), settings, MPI_COMM_WORLD);
+    if (rank == 0)
+      fmt::print("done: {} steps to t = {:.6g} s in {:.2f} s wall (fluid {:.2f} s, solid {:.2f} s, output {:.2f} s); series {}\n",
+                 s.n_steps, s.end_time, s.wall_seconds, s.t_fluid, s.t_solid, s.t_output, s.pvd_path);
+  } catch (const RunFailure& e) {
+    fmt::print(stderr, "mpsfsi: run stopped: {}\n", e.what());
+    return 3;
+  }
+  return 0;
 }
 
 }  // namespace mpsfsi

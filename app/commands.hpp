@@ -22,6 +22,6 @@ struct RunOptions {
 };
 
 int command_check(const RunOptions& opts);
-int command_run(const RunOptions& opts);
+int command_run(const RunOptions& opts, const std::string& command_line);
 
 }  // namespace mpsfsi

@@ -1,17 +1,29 @@
 // The mpsfsi program: `mpsfsi check CASE` validates a case and prints its particle counts and memory
 // estimate; `mpsfsi run CASE` runs it. Exit codes: 0 success, 2 bad input (case file or command
-// line), 1 a run that failed (diagnosis printed).
+// line), 1 an internal or I/O error, 3 a run that went unstable (diagnosis printed).
 #include "app/commands.hpp"
 #include "io/case.hpp"
 
 #include <CLI/CLI.hpp>
+#include <mpi.h>
 #include <fmt/format.h>
 
 #include <exception>
 #include <iostream>
 
+namespace {
+/// MPI for the whole program; finalized on every return path.
+struct MpiSession {
+  MpiSession(int* argc, char*** argv) { MPI_Init(argc, argv); }
+  ~MpiSession() { MPI_Finalize(); }
+};
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace mpsfsi;
+  const MpiSession mpi(&argc, &argv);
+  std::string command_line;
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
   CLI::App app{"mpsfsi: fluid-structure interaction with the Moving Particle Semi-implicit method"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("mpsfsi ") + MPSFSI_VERSION);
@@ -45,7 +57,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*check) return command_check(check_opts);
-    if (*run) return command_run(run_opts);
+    if (*run) return command_run(run_opts, command_line);
   } catch (const CaseError& e) {
     std::cerr << "mpsfsi: error: " << e.what() << "\n";
     return 2;

@@ -1,1 +1,994 @@
-// placeholder
+// The case-file parser: reads a case (cases/*.yaml; schema in docs/case-format.md) with yaml-cpp,
+// applies the command-line overrides (--set dotted.key=value) to the YAML tree, checks every value
+// and fills a CaseSpec in SI units. Every problem is a CaseError whose message names the file, the
+// line (or the --set override that caused it), the dotted key and the expected form, e.g.
+//   cases/dam_break.yaml:7: dp = -0.004: expected a positive number (particle spacing in metres)
+//
+// The reading is built on MapReader, which wraps one YAML map with its dotted path: each schema key
+// is one call (required/optional number, vector, rectangle, name, choice, ...), and finish()
+// reports every key that was not asked for as unknown. Cross-checks (materials, names, overlaps)
+// follow the reading.
+#include "io/case.hpp"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <utility>
+
+namespace mpsfsi {
+
+namespace {
+
+/// Index of the material called `name` in `materials`, or -1.
+template <typename Material>
+int index_by_name(const std::vector<Material>& materials, const std::string& name) {
+  for (std::size_t i = 0; i < materials.size(); ++i)
+    if (materials[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+}  // namespace
+
+int CaseSpec::fluid_material_index(const std::string& name) const {
+  return index_by_name(fluid_materials, name);
+}
+
+int CaseSpec::solid_material_index(const std::string& name) const {
+  return index_by_name(solid_materials, name);
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr Real pi = 3.14159265358979323846;
+
+/// Largest number of lattice cells along one side of a rectangle, and of particles in all bodies.
+constexpr Real max_cells_per_side = 1e6;
+constexpr Real max_particles = 1e9;
+
+// ---------------------------------------------------------------------------------------------
+// Small string helpers.
+
+std::string join(const std::vector<std::string>& items, const std::string& separator = ", ") {
+  std::string out;
+  for (const auto& s : items) {
+    if (!out.empty()) out += separator;
+    out += s;
+  }
+  return out;
+}
+
+std::string trim(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t");
+  if (first == std::string::npos) return {};
+  const auto last = s.find_last_not_of(" \t");
+  return s.substr(first, last - first + 1);
+}
+
+bool is_digits(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](const unsigned char c) { return std::isdigit(c); });
+}
+
+/// Names of cases, materials, bodies, walls, probes and output fields: letters, digits, '_' and '-',
+/// starting with a letter or '_' (so that they are file-name safe and never look like a list
+/// index or contain the '.' of a --set path).
+bool is_name(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](const unsigned char c) { return std::isalnum(c) || c == '_' || c == '-'; });
+}
+
+const std::string name_form = "a name of letters, digits, '_' and '-' that starts with a letter or '_'";
+
+/// A decimal number: [+-]digits[.digits][e[+-]digits]. No hex, inf or nan; finite after conversion.
+std::optional<Real> parse_real(const std::string& s) {
+  std::size_t i = 0;
+  const std::size_t n = s.size();
+  const auto digits = [&] {
+    std::size_t count = 0;
+    while (i < n && std::isdigit(static_cast<unsigned char>(s[i]))) ++i, ++count;
+    return count;
+  };
+  if (i < n && (s[i] == '+' || s[i] == '-')) ++i;
+  std::size_t mantissa = digits();
+  if (i < n && s[i] == '.') {
+    ++i;
+    mantissa += digits();
+  }
+  if (mantissa == 0) return std::nullopt;
+  if (i < n && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < n && (s[i] == '+' || s[i] == '-')) ++i;
+    if (digits() == 0) return std::nullopt;
+  }
+  if (i != n) return std::nullopt;
+  const Real value = std::strtod(s.c_str(), nullptr);
+  if (!std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+/// A decimal integer: [+-]digits, within the range of int.
+std::optional<long long> parse_integer(const std::string& s) {
+  const std::size_t start = (!s.empty() && (s[0] == '+' || s[0] == '-')) ? 1 : 0;
+  if (!is_digits(s.substr(start)) || s.size() - start > 10) return std::nullopt;
+  const long long value = std::strtoll(s.c_str(), nullptr, 10);
+  if (value > 2147483647LL || value < -2147483647LL) return std::nullopt;
+  return value;
+}
+
+/// Optimal-string-alignment distance, for "did you mean" hints.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+bool looks_like(const std::string& typo, const std::string& key) {
+  return edit_distance(typo, key) <= (key.size() <= 4 ? 1u : 2u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Paths and locations.
+
+/// Dotted path for messages: "" is the top level.
+std::string show_path(const std::string& path) { return path.empty() ? "(top level)" : path; }
+
+std::string child_path(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
+
+std::string item_path(const std::string& parent, const std::size_t index) { return fmt::format("{}[{}]", parent, index); }
+
+/// True when `path` is `root` or lies below it ("bodies[0].velocity" lies below "bodies[0]").
+bool lies_within(const std::string& path, const std::string& root) {
+  if (root.empty()) return true;
+  if (path.size() < root.size() || path.compare(0, root.size(), root) != 0) return false;
+  return path.size() == root.size() || path[root.size()] == '.' || path[root.size()] == '[';
+}
+
+/// A value as it appears in messages: scalars as written (quoted ones in quotes), lists and maps
+/// in flow style, long values shortened.
+std::string show(const YAML::Node& node) {
+  std::string text;
+  if (!node.IsDefined() || node.IsNull()) {
+    text = "(empty)";
+  } else if (node.IsScalar()) {
+    text = node.Tag() == "!" ? "\"" + node.Scalar() + "\"" : node.Scalar();
+  } else {
+    YAML::Emitter out;
+    out.SetMapFormat(YAML::Flow);
+    out.SetSeqFormat(YAML::Flow);
+    out << node;
+    text = out.c_str();
+  }
+  for (auto& c : text)
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+  return text.size() > 60 ? text.substr(0, 57) + "..." : text;
+}
+
+/// A --set override after it was applied: its text and the path of the subtree it wrote (the
+/// topmost node it created, or the node it replaced).
+struct AppliedOverride {
+  std::string text;
+  std::string root;
+};
+
+/// One value of the case tree: the node, its dotted path and, for map values, the key node (whose
+/// line is the one reported: the value of `rectangle:` may start on the next line).
+struct Field {
+  YAML::Node node;
+  std::string path;
+  YAML::Node key = YAML::Node();
+};
+
+/// Where the case text came from; turns a field into "file:line" (or "file (--set ...)") and throws.
+class Source {
+ public:
+  explicit Source(std::string file) : file_(std::move(file)) {}
+
+  const std::string& file() const { return file_; }
+
+  std::string location(const Field& f) const {
+    for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it)
+      if (!f.path.empty() && lies_within(f.path, it->root)) return fmt::format("{} (--set {})", file_, it->text);
+    const YAML::Mark key_mark = f.key.IsDefined() ? f.key.Mark() : YAML::Mark::null_mark();
+    const YAML::Mark mark = key_mark.is_null() && f.node.IsDefined() ? f.node.Mark() : key_mark;
+    std::string where = mark.is_null() ? file_ : fmt::format("{}:{}", file_, mark.line + 1);
+    for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it) {
+      if (!f.path.empty() && lies_within(it->root, f.path)) {
+        where += fmt::format(" (after --set {})", it->text);
+        break;
+      }
+    }
+    return where;
+  }
+
+  /// Throws "location: message".
+  [[noreturn]] void fail(const Field& f, const std::string& message) const {
+    throw CaseError(fmt::format("{}: {}", location(f), message));
+  }
+
+  /// Throws "location: path = value: expected <form>".
+  [[noreturn]] void expected(const Field& f, const std::string& form) const {
+    fail(f, fmt::format("{} = {}: expected {}", show_path(f.path), show(f.node), form));
+  }
+
+  void add_override(AppliedOverride o) {
+    // A later override of the same subtree replaces what the earlier one wrote.
+    overrides_.erase(std::remove_if(overrides_.begin(), overrides_.end(),
+                                    [&](const AppliedOverride& old) { return lies_within(old.root, o.root); }),
+                     overrides_.end());
+    overrides_.push_back(std::move(o));
+  }
+
+ private:
+  std::string file_;
+  std::vector<AppliedOverride> overrides_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Conversions of one field. `form` is the expected form, used in the message.
+
+using Check = std::function<bool(Real)>;
+
+const Check any_number = [](Real) { return true; };
+const Check positive = [](const Real x) { return x > 0; };
+const Check non_negative = [](const Real x) { return x >= 0; };
+/// lo < x <= hi
+Check in_half_open(const Real lo, const Real hi) {
+  return [=](const Real x) { return x > lo && x <= hi; };
+}
+/// lo < x < hi
+Check in_open(const Real lo, const Real hi) {
+  return [=](const Real x) { return x > lo && x < hi; };
+}
+
+bool is_plain_scalar(const YAML::Node& node) { return node.IsScalar() && node.Tag() == "?"; }
+
+Real to_real(const Source& src, const Field& f, const Check& check, const std::string& form) {
+  const auto value = is_plain_scalar(f.node) ? parse_real(f.node.Scalar()) : std::nullopt;
+  if (!value || !check(*value)) src.expected(f, form);
+  return *value;
+}
+
+int to_int(const Source& src, const Field& f, const std::function<bool(long long)>& check, const std::string& form) {
+  const auto value = is_plain_scalar(f.node) ? parse_integer(f.node.Scalar()) : std::nullopt;
+  if (!value || !check(*value)) src.expected(f, form);
+  return static_cast<int>(*value);
+}
+
+bool to_bool(const Source& src, const Field& f, const std::string& form) {
+  if (is_plain_scalar(f.node)) {
+    const std::string& s = f.node.Scalar();
+    if (s == "true" || s == "True" || s == "TRUE") return true;
+    if (s == "false" || s == "False" || s == "FALSE") return false;
+  }
+  src.expected(f, form);
+}
+
+std::string to_text(const Source& src, const Field& f, const std::string& form) {
+  if (!f.node.IsScalar() || trim(f.node.Scalar()).empty()) src.expected(f, form);
+  return f.node.Scalar();
+}
+
+std::string to_name(const Source& src, const Field& f, const std::string& form) {
+  if (!f.node.IsScalar() || !is_name(f.node.Scalar())) src.expected(f, form);
+  return f.node.Scalar();
+}
+
+std::string to_choice(const Source& src, const Field& f, const std::vector<std::string>& options) {
+  if (!f.node.IsScalar() || std::find(options.begin(), options.end(), f.node.Scalar()) == options.end())
+    src.expected(f, "one of: " + join(options));
+  return f.node.Scalar();
+}
+
+Vec to_vec(const Source& src, const Field& f, const std::string& form) {
+  if (!f.node.IsSequence() || f.node.size() != static_cast<std::size_t>(dim)) src.expected(f, form);
+  Vec v;
+  for (int i = 0; i < dim; ++i) {
+    const YAML::Node c = f.node[static_cast<std::size_t>(i)];
+    const auto value = is_plain_scalar(c) ? parse_real(c.Scalar()) : std::nullopt;
+    if (!value) src.expected(f, form);
+    v[i] = *value;
+  }
+  return v;
+}
+
+std::string show_vec(const Vec& v) { return fmt::format("[{:g}, {:g}]", v[0], v[1]); }
+
+std::string show_rect(const Rect& r) { return fmt::format("{{min: {}, max: {}}}", show_vec(r.lo), show_vec(r.hi)); }
+
+// ---------------------------------------------------------------------------------------------
+// MapReader: one YAML map and its dotted path.
+
+class MapReader {
+ public:
+  /// `form` describes the map, for the message when the node is not a map. A null node (a key
+  /// with nothing after the colon) reads as an empty map.
+  MapReader(const Source& src, Field field, const std::string& form) : src_(src), field_(std::move(field)) {
+    if (field_.node.IsNull() || !field_.node.IsDefined()) return;
+    if (!field_.node.IsMap()) src_.expected(field_, form);
+    for (const auto& kv : field_.node) {
+      const Field key_field{kv.first, field_.path, kv.first};
+      if (!kv.first.IsScalar() || kv.first.Scalar().empty())
+        src_.fail(key_field, fmt::format("key {} in {}: expected a plain name as key", show(kv.first), show_path(field_.path)));
+      const std::string key = kv.first.Scalar();
+      for (const auto& e : entries_) {
+        if (e.key == key) {
+          const auto first_line = e.key_node.Mark().line + 1;
+          src_.fail(Field{kv.first, child_path(field_.path, key), kv.first},
+                    fmt::format("duplicate key '{}' in {} (first given at line {}): expected each key once", key,
+                                show_path(field_.path), first_line));
+        }
+      }
+      entries_.push_back({key, kv.first, kv.second});
+    }
+  }
+
+  const Field& field() const { return field_; }
+  const Source& source() const { return src_; }
+  std::string path_of(const std::string& key) const { return child_path(field_.path, key); }
+
+  /// The key's value, or nothing when the key is absent or null (`key: ~` is the same as leaving it out).
+  std::optional<Field> optional(const std::string& key) {
+    known(key);
+    const Entry* e = find(key);
+    if (e == nullptr || e->value.IsNull()) return std::nullopt;
+    return Field{e->value, path_of(key), e->key_node};
+  }
+
+  /// The key's value; throws "missing key" when absent and "expected <form>" when null.
+  Field required(const std::string& key, const std::string& form) {
+    known(key);
+    if (const Entry* e = find(key)) {
+      const Field f{e->value, path_of(key), e->key_node};
+      if (e->value.IsNull()) src_.expected(f, form);
+      return f;
+    }
+    // A key that was not asked for and looks like the missing one is most likely a typo of it.
+    for (const auto& e : entries_) {
+      if (std::find(known_.begin(), known_.end(), e.key) == known_.end() && looks_like(e.key, key))
+        src_.fail(Field{e.value, path_of(e.key), e.key_node},
+                  fmt::format("unknown key '{}' in {}; did you mean '{}'? expected: {}, {}", e.key, show_path(field_.path),
+                              key, path_of(key), form));
+    }
+    src_.fail(field_, fmt::format("missing key '{}' in {}; expected: {}, {}", key, show_path(field_.path), path_of(key), form));
+  }
+
+  /// The field of a key read before (for messages of cross-checks).
+  Field at(const std::string& key) const {
+    const Entry* e = find(key);
+    return e ? Field{e->value, path_of(key), e->key_node} : field_;
+  }
+
+  bool has(const std::string& key) {
+    known(key);
+    const Entry* e = find(key);
+    return e != nullptr && !e->value.IsNull();
+  }
+
+  Real number(const std::string& key, const Check& check, const std::string& form) {
+    return to_real(src_, required(key, form), check, form);
+  }
+  Real number(const std::string& key, const Real fallback, const Check& check, const std::string& form) {
+    const auto f = optional(key);
+    return f ? to_real(src_, *f, check, form) : fallback;
+  }
+  std::optional<Real> optional_number(const std::string& key, const Check& check, const std::string& form) {
+    const auto f = optional(key);
+    return f ? std::optional<Real>(to_real(src_, *f, check, form)) : std::nullopt;
+  }
+  int integer(const std::string& key, const int fallback, const std::function<bool(long long)>& check,
+              const std::string& form) {
+    const auto f = optional(key);
+    return f ? to_int(src_, *f, check, form) : fallback;
+  }
+  bool boolean(const std::string& key, const bool fallback, const std::string& form) {
+    const auto f = optional(key);
+    return f ? to_bool(src_, *f, form) : fallback;
+  }
+  std::string text(const std::string& key, const std::string& form) { return to_text(src_, required(key, form), form); }
+  std::string name(const std::string& key, const std::string& form) { return to_name(src_, required(key, form), form); }
+  std::string choice(const std::string& key, const std::vector<std::string>& options) {
+    return to_choice(src_, required(key, "one of: " + join(options)), options);
+  }
+  std::string choice(const std::string& key, const std::string& fallback, const std::vector<std::string>& options) {
+    const auto f = optional(key);
+    return f ? to_choice(src_, *f, options) : fallback;
+  }
+  Vec vec(const std::string& key, const std::string& form) { return to_vec(src_, required(key, form), form); }
+  Vec vec(const std::string& key, const Vec& fallback, const std::string& form) {
+    const auto f = optional(key);
+    return f ? to_vec(src_, *f, form) : fallback;
+  }
+  Rect rect(const std::string& key, const std::string& form) { return to_rect(required(key, form), form); }
+  std::optional<Rect> optional_rect(const std::string& key, const std::string& form) {
+    const auto f = optional(key);
+    return f ? std::optional<Rect>(to_rect(*f, form)) : std::nullopt;
+  }
+
+  /// A nested map (required, or empty when absent).
+  MapReader map(const std::string& key, const std::string& form) { return MapReader(src_, required(key, form), form); }
+  MapReader optional_map(const std::string& key, const std::string& form) {
+    const auto f = optional(key);
+    return MapReader(src_, f ? *f : Field{YAML::Node(), path_of(key)}, form);
+  }
+
+  /// The items of a list, with paths key[i]; an absent optional list is empty.
+  std::vector<Field> list(const std::string& key, const std::string& form, const bool is_required) {
+    const auto f = is_required ? std::optional<Field>(required(key, form)) : optional(key);
+    std::vector<Field> items;
+    if (!f) return items;
+    if (!f->node.IsSequence() || (is_required && f->node.size() == 0)) src_.expected(*f, form);
+    for (std::size_t i = 0; i < f->node.size(); ++i) items.push_back({f->node[i], item_path(f->path, i)});
+    return items;
+  }
+
+  /// Every key of a map whose keys are names chosen by the user (materials).
+  std::vector<std::pair<std::string, Field>> items() {
+    std::vector<std::pair<std::string, Field>> out;
+    for (const auto& e : entries_) {
+      known(e.key);
+      out.emplace_back(e.key, Field{e.value, path_of(e.key), e.key_node});
+    }
+    return out;
+  }
+  bool empty() const { return entries_.empty(); }
+
+  /// Reports the first key that was never asked for.
+  void finish() const {
+    for (const auto& e : entries_) {
+      if (std::find(known_.begin(), known_.end(), e.key) != known_.end()) continue;
+      std::string hint;
+      for (const auto& k : known_)
+        if (looks_like(e.key, k)) hint = fmt::format(" (did you mean '{}'?)", k);
+      src_.fail(Field{e.value, path_of(e.key), e.key_node},
+                fmt::format("unknown key '{}' in {}; expected one of: {}{}", e.key, show_path(field_.path), join(known_), hint));
+    }
+  }
+
+ private:
+  struct Entry {
+    std::string key;
+    YAML::Node key_node;
+    YAML::Node value;
+  };
+
+  const Entry* find(const std::string& key) const {
+    for (const auto& e : entries_)
+      if (e.key == key) return &e;
+    return nullptr;
+  }
+
+  void known(const std::string& key) {
+    if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.push_back(key);
+  }
+
+  Rect to_rect(const Field& f, const std::string& form) const {
+    MapReader r(src_, f, form);
+    Rect rect;
+    rect.lo = r.vec("min", "the lower-left corner [x, y] in metres");
+    rect.hi = r.vec("max", "the upper-right corner [x, y] in metres");
+    r.finish();
+    if (!(rect.hi.array() > rect.lo.array()).all())
+      src_.fail(r.at("max"), fmt::format("{} = {}: expected max > min in both components", show_path(f.path), show_rect(rect)));
+    return rect;
+  }
+
+  const Source& src_;
+  Field field_;
+  std::vector<Entry> entries_;
+  std::vector<std::string> known_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The sections of a case.
+
+const std::string rect_form = "a rectangle {min: [x, y], max: [x, y]} in metres";
+const std::string point_form = "a point [x, y] in metres";
+
+void read_time(MapReader r, TimeSpec& time) {
+  time.end = r.number("end", positive, "a positive number [s]");
+  time.dt = r.optional_number("dt", positive, "a positive number (fixed time step) [s]");
+  time.cfl = r.optional_number("cfl", in_half_open(0, 1), "a Courant number C with 0 < C <= 1");
+  const auto dt_max = r.optional_number("dt_max", positive, "a positive number (largest adaptive time step) [s]");
+  r.finish();
+  const Source& src = r.source();
+  if (time.dt && time.cfl)
+    src.fail(r.at("cfl"), "time: both dt and cfl are given; expected exactly one of time.dt (fixed step [s]) or "
+                          "time.cfl (adaptive step)");
+  if (!time.dt && !time.cfl)
+    src.fail(r.field(), "missing key 'dt' or 'cfl' in time; expected exactly one of: time.dt, a positive number [s]; "
+                        "or time.cfl, a Courant number C with 0 < C <= 1");
+  if (time.dt && *time.dt > time.end)
+    src.expected(r.at("dt"), fmt::format("a time step no larger than time.end = {:g} s", time.end));
+  if (dt_max && time.dt)
+    src.fail(r.at("dt_max"), "time.dt_max: expected only with time.cfl (it bounds the adaptive step); remove it or use cfl");
+  if (dt_max) time.dt_max = *dt_max;
+}
+
+void read_materials(MapReader r, CaseSpec& spec) {
+  const Source& src = r.source();
+  if (r.empty()) src.expected(r.field(), "a map of materials, e.g. water: {type: fluid, rho: 1000, nu: 1.0e-6}");
+  for (const auto& [name, field] : r.items()) {
+    if (!is_name(name)) src.fail(Field{field.key, field.path, field.key}, fmt::format("material name '{}': expected {}", name, name_form));
+    MapReader m(src, field, "a material {type: fluid | solid, rho: ..., ...}");
+    if (m.choice("type", {"fluid", "solid"}) == "fluid") {
+      FluidMaterial f;
+      f.name = name;
+      f.rho = m.number("rho", positive, "a positive number (density) [kg/m3]");
+      f.nu = m.number("nu", non_negative, "a non-negative number (kinematic viscosity) [m2/s]");
+      f.c = m.number("c", f.c, positive, "a positive number (sound speed of the compressibility term) [m/s]");
+      f.kappa = m.number("kappa", f.kappa, in_half_open(0, 1), "a number in (0, 1] (relaxation of the PPE source)");
+      spec.fluid_materials.push_back(f);
+    } else {
+      SolidMaterial s;
+      s.name = name;
+      s.rho = m.number("rho", positive, "a positive number (density) [kg/m3]");
+      s.E = m.number("E", positive, "a positive number (Young's modulus) [Pa]");
+      s.nu = m.number("nu", in_open(-1, 0.5), "a number in (-1, 0.5) (Poisson's ratio)");
+      s.fracture_strain = m.optional_number("fracture_strain", positive, "a positive number (strain at which bonds break)");
+      spec.solid_materials.push_back(s);
+    }
+    m.finish();
+  }
+}
+
+/// A name that must be unique within `names` (name -> path of its first use).
+std::string unique_name(MapReader& r, std::map<std::string, std::string>& names, const std::string& among) {
+  const std::string name = r.name("name", name_form + ", unique among " + among);
+  const auto [it, inserted] = names.emplace(name, r.path_of("name"));
+  if (!inserted)
+    r.source().fail(r.at("name"), fmt::format("{} = {}: duplicate name (also {}); expected a name unique among {}",
+                                              r.path_of("name"), name, it->second, among));
+  return name;
+}
+
+/// Fields of the bodies and walls kept for the cross-checks.
+struct GeometryFields {
+  std::vector<Field> body_rect, body_material, body_clamp, wall_rect;
+};
+
+void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g) {
+  const Source& src = top.source();
+  const std::string form = "a list of bodies, each {name, kind: fluid | solid, material, rectangle, ...}";
+  for (const Field& item : top.list("bodies", form, true)) {
+    MapReader r(src, item, "a body {name, kind: fluid | solid, material, rectangle, ...}");
+    BodySpec b;
+    b.name = unique_name(r, names, "bodies and walls");
+    b.kind = r.choice("kind", {"fluid", "solid"}) == "solid" ? BodyKind::solid : BodyKind::fluid;
+    b.material = r.name("material", "the name of a material of the body's kind");
+    b.rect = r.rect("rectangle", rect_form + " filled with particles");
+    b.clamp = r.optional_rect("clamp", rect_form + " (solid bodies: particles inside are clamped)");
+    b.velocity = r.vec("velocity", Vec::Zero(), "an initial velocity [vx, vy] in m/s");
+    b.angular_velocity = r.number("angular_velocity", 0, any_number, "a number (initial angular velocity) [rad/s]");
+    r.finish();
+    g.body_rect.push_back(r.at("rectangle"));
+    g.body_material.push_back(r.at("material"));
+    g.body_clamp.push_back(r.at("clamp"));
+    if (b.clamp && b.kind == BodyKind::fluid)
+      src.fail(r.at("clamp"), fmt::format("{}: a fluid body cannot be clamped; expected clamp only on solid bodies",
+                                          r.path_of("clamp")));
+    spec.bodies.push_back(b);
+  }
+}
+
+void read_walls(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g) {
+  const Source& src = top.source();
+  for (const Field& item : top.list("walls", "a list of walls, each {name, type: box | block, rectangle}", false)) {
+    MapReader r(src, item, "a wall {name, type: box | block, rectangle, open_top}");
+    WallSpec w;
+    w.name = unique_name(r, names, "bodies and walls");
+    w.type = r.choice("type", {"box", "block"}) == "box" ? WallType::box : WallType::block;
+    w.rect = r.rect("rectangle", rect_form + (w.type == WallType::box ? " (inner, wetted side of the box)" : " (the block)"));
+    if (w.type == WallType::box) w.open_top = r.boolean("open_top", true, "true or false (box without a lid)");
+    r.finish();
+    g.wall_rect.push_back(r.at("rectangle"));
+    spec.walls.push_back(w);
+  }
+}
+
+bool inside(const Rect& inner, const Rect& outer) {
+  return (inner.lo.array() >= outer.lo.array()).all() && (inner.hi.array() <= outer.hi.array()).all();
+}
+
+/// Inside a box: within its inner rectangle; an open box does not bound the top.
+bool inside_box(const Rect& r, const WallSpec& box) {
+  Rect bound = box.rect;
+  if (box.open_top) bound.hi[1] = std::numeric_limits<Real>::infinity();
+  return inside(r, bound);
+}
+
+/// Every rectangle is inside the domain and at least one particle (dp/2) thick; bodies do not overlap
+/// each other or a block and lie in a box when there is one; clamps touch their body.
+void check_geometry(const Source& src, const CaseSpec& spec, const GeometryFields& g, const Field& dp_field) {
+  const auto check_size = [&](const Rect& r, const Field& f) {
+    const Vec size = r.size();
+    if (size.minCoeff() < 0.5 * spec.dp)
+      src.fail(f, fmt::format("{} = {}: expected a rectangle at least dp/2 = {:g} m wide and high (one particle)",
+                              f.path, show_rect(r), 0.5 * spec.dp));
+    if (size.maxCoeff() > max_cells_per_side * spec.dp)
+      src.fail(f, fmt::format("{} = {}: expected at most {:g} particles along a side (dp = {:g} m)", f.path, show_rect(r),
+                              max_cells_per_side, spec.dp));
+    if (!inside(r, spec.domain))
+      src.fail(f, fmt::format("{} = {} lies outside the domain {}: expected a rectangle inside the domain", f.path,
+                              show_rect(r), show_rect(spec.domain)));
+  };
+  Real n_particles = 0;
+  for (std::size_t i = 0; i < spec.bodies.size(); ++i) {
+    check_size(spec.bodies[i].rect, g.body_rect[i]);
+    n_particles += spec.bodies[i].rect.size().prod() / (spec.dp * spec.dp);
+  }
+  for (std::size_t i = 0; i < spec.walls.size(); ++i) check_size(spec.walls[i].rect, g.wall_rect[i]);
+  if (n_particles > max_particles)
+    src.fail(dp_field, fmt::format("dp = {:g}: the bodies would have about {:.3g} particles; expected at most {:g} "
+                                   "(dp is in metres)", spec.dp, n_particles, max_particles));
+
+  for (std::size_t i = 0; i < spec.bodies.size(); ++i) {
+    const BodySpec& b = spec.bodies[i];
+    const Field& f = g.body_rect[i];
+    for (std::size_t j = 0; j < i; ++j)
+      if (overlaps(b.rect, spec.bodies[j].rect))
+        src.fail(f, fmt::format("{} overlaps {} ('{}'): bodies must not overlap", f.path, g.body_rect[j].path,
+                                spec.bodies[j].name));
+    const WallSpec* first_box = nullptr;
+    bool in_a_box = false;
+    for (std::size_t k = 0; k < spec.walls.size(); ++k) {
+      const WallSpec& w = spec.walls[k];
+      if (w.type == WallType::block && overlaps(b.rect, w.rect))
+        src.fail(f, fmt::format("{} overlaps {} ('{}'): bodies must not overlap walls", f.path, g.wall_rect[k].path, w.name));
+      if (w.type == WallType::box) {
+        if (!first_box) first_box = &w;
+        in_a_box = in_a_box || inside_box(b.rect, w);
+      }
+    }
+    if (first_box && !in_a_box) {
+      const auto k = static_cast<std::size_t>(first_box - spec.walls.data());
+      src.fail(f, fmt::format("{} = {} lies outside {} ('{}'), the inner rectangle of the tank{}: expected bodies inside "
+                              "the tank",
+                              f.path, show_rect(b.rect), g.wall_rect[k].path, first_box->name,
+                              first_box->open_top ? " (open top)" : ""));
+    }
+    if (b.clamp && !overlaps(*b.clamp, b.rect))
+      src.fail(g.body_clamp[i], fmt::format("{} = {} does not overlap {}: expected a clamp region that covers part of "
+                                            "the body",
+                                            g.body_clamp[i].path, show_rect(*b.clamp), f.path));
+  }
+}
+
+void check_body_materials(const Source& src, const CaseSpec& spec, const GeometryFields& g) {
+  const auto names = [](const auto& materials) {
+    std::vector<std::string> out;
+    for (const auto& m : materials) out.push_back(m.name);
+    return out.empty() ? std::string("none defined") : join(out);
+  };
+  for (std::size_t i = 0; i < spec.bodies.size(); ++i) {
+    const BodySpec& b = spec.bodies[i];
+    const bool solid = b.kind == BodyKind::solid;
+    const std::string kind = solid ? "solid" : "fluid";
+    const std::string wanted = fmt::format("a {} material (one of: {})", kind,
+                                           solid ? names(spec.solid_materials) : names(spec.fluid_materials));
+    const bool is_fluid_material = spec.fluid_material_index(b.material) >= 0;
+    const bool is_solid_material = spec.solid_material_index(b.material) >= 0;
+    const Field& f = g.body_material[i];
+    if (!is_fluid_material && !is_solid_material)
+      src.fail(f, fmt::format("{} = {}: unknown material; expected {}", f.path, b.material, wanted));
+    if (solid != is_solid_material)
+      src.fail(f, fmt::format("{} = {}: '{}' is a {} material but the body is {}; expected {}", f.path, b.material,
+                              b.material, solid ? "fluid" : "solid", kind, wanted));
+  }
+}
+
+void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
+  const Source& src = r.source();
+  TankMotionSpec& m = spec.tank_motion;
+  const std::string type = r.choice("type", "none", {"none", "sine_roll", "table"});
+  if (type == "sine_roll") {
+    m.type = TankMotionType::sine_roll;
+    m.pivot = r.vec("pivot", point_form + " (centre of the roll)");
+    m.amplitude = r.number("amplitude_deg", in_open(0, 90), "a number of degrees in (0, 90) (roll amplitude)") * pi / 180;
+    m.period = r.number("period", positive, "a positive number (roll period) [s]");
+  } else if (type == "table") {
+    m.type = TankMotionType::table;
+    m.pivot = r.vec("pivot", point_form + " (centre of the roll)");
+    const std::string file = r.text("file", "the path of a CSV file of time [s], angle [deg], relative to the case file");
+    const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+      src.fail(r.at("file"), fmt::format("tank_motion.file = {}: no such file '{}'; expected a CSV file of time [s], "
+                                         "angle [deg] (relative to the case file)",
+                                         file, path.string()));
+    m.file = path.string();
+  }
+  r.finish();
+  if (m.type != TankMotionType::none && spec.walls.empty())
+    src.fail(r.at("type"), fmt::format("tank_motion.type = {}: expected walls (a tank) to move", type));
+}
+
+void read_coupling(MapReader r, CouplingSpec& c) {
+  const std::string form = "a positive integer or auto (solid sub-steps per fluid step)";
+  if (const auto f = r.optional("subcycles")) {
+    c.subcycles = (is_plain_scalar(f->node) && f->node.Scalar() == "auto")
+                      ? 0
+                      : to_int(r.source(), *f, [](const long long n) { return n >= 1; }, form);
+  }
+  r.finish();
+}
+
+void read_fluid_numerics(MapReader r, FluidNumerics& n) {
+  n.re_gradient = r.number("re_gradient", n.re_gradient, [](Real x) { return x > 1; },
+                           "a number > 1 (effective radius of density and gradient, in units of dp)");
+  n.re_laplacian = r.number("re_laplacian", n.re_laplacian, [](Real x) { return x > 1; },
+                            "a number > 1 (effective radius of the Laplacian, in units of dp)");
+  n.beta1 = r.number("beta1", n.beta1, in_half_open(0, 1), "a number in (0, 1] (free surface: n_i < beta1 n0)");
+  n.beta2 = r.number("beta2", n.beta2, in_half_open(0, 1), "a number in (0, 1] (free surface: N_i < beta2 N0)");
+  n.gradient = r.choice("gradient", n.gradient, {"min_pressure", "corrected"});
+  n.solver = r.choice("solver", n.solver, {"cg", "gmres"});
+  n.preconditioner = r.choice("preconditioner", n.preconditioner, {"muelu", "chebyshev", "ilu", "jacobi", "none"});
+  n.tolerance = r.number("tolerance", n.tolerance, in_open(0, 1), "a number in (0, 1) (relative residual of the pressure solve)");
+  n.max_iterations = r.integer("max_iterations", n.max_iterations, [](const long long k) { return k >= 1; },
+                               "a positive integer (iterations of the pressure solve)");
+  r.finish();
+}
+
+void read_solid_numerics(MapReader r, SolidNumerics& n) {
+  n.re = r.number("re", n.re, [](Real x) { return x > 1; }, "a number > 1 (effective radius of the bonds, in units of dp)");
+  n.dt = r.optional_number("dt", positive, "a positive number (solid time step) [s]");
+  r.finish();
+}
+
+void read_probes(MapReader& top, CaseSpec& spec) {
+  const Source& src = top.source();
+  std::map<std::string, std::string> names;
+  for (const Field& item : top.list("probes", "a list of probes, each {name, type, position, body}", false)) {
+    MapReader r(src, item, "a probe {name, type: pressure | surge_front | column_height | displacement, position, body}");
+    ProbeSpec p;
+    p.name = unique_name(r, names, "probes");
+    const std::string type = r.choice("type", {"pressure", "surge_front", "column_height", "displacement"});
+    p.type = type == "pressure"        ? ProbeType::pressure
+             : type == "surge_front"   ? ProbeType::surge_front
+             : type == "column_height" ? ProbeType::column_height
+                                       : ProbeType::displacement;
+    const std::string position_form = point_form + (p.type == ProbeType::displacement ? " on the body" : "");
+    const bool has_position = p.type != ProbeType::surge_front || r.has("position");
+    if (has_position) p.position = r.vec("position", position_form);
+    if (p.type == ProbeType::displacement)
+      p.body = r.name("body", "the name of a solid body (whose displacement is measured)");
+    else if (r.has("body"))
+      p.body = r.name("body", "the name of a body");
+    r.finish();
+
+    if (has_position && !spec.domain.contains(p.position))
+      src.fail(r.at("position"), fmt::format("{} = {}: expected a point inside the domain {}", r.path_of("position"),
+                                             show_vec(p.position), show_rect(spec.domain)));
+    if (!p.body.empty()) {
+      const auto b = std::find_if(spec.bodies.begin(), spec.bodies.end(), [&](const BodySpec& s) { return s.name == p.body; });
+      std::vector<std::string> candidates;
+      for (const auto& s : spec.bodies)
+        if (p.type != ProbeType::displacement || s.kind == BodyKind::solid) candidates.push_back(s.name);
+      const std::string wanted = fmt::format("the name of a{} body (one of: {})",
+                                             p.type == ProbeType::displacement ? " solid" : "",
+                                             candidates.empty() ? std::string("none defined") : join(candidates));
+      if (b == spec.bodies.end())
+        src.fail(r.at("body"), fmt::format("{} = {}: unknown body; expected {}", r.path_of("body"), p.body, wanted));
+      if (p.type == ProbeType::displacement && b->kind != BodyKind::solid)
+        src.fail(r.at("body"), fmt::format("{} = {}: '{}' is a fluid body; expected {}", r.path_of("body"), p.body, p.body,
+                                           wanted));
+      if (p.type == ProbeType::displacement && !b->rect.contains(p.position))
+        src.fail(r.at("position"), fmt::format("{} = {}: expected a point on body '{}' {}", r.path_of("position"),
+                                               show_vec(p.position), b->name, show_rect(b->rect)));
+    }
+    spec.probes.push_back(p);
+  }
+}
+
+void read_output(MapReader r, OutputSpec& out) {
+  out.interval = r.number("interval", out.interval, positive, "a positive number (simulated time between frames) [s]");
+  for (const Field& f : r.list("fields", "a list of field names, e.g. [pressure, velocity]", false)) {
+    const std::string name = to_name(r.source(), f, "a field name (" + name_form + ")");
+    if (std::find(out.fields.begin(), out.fields.end(), name) != out.fields.end())
+      r.source().fail(f, fmt::format("{} = {}: duplicate field; expected each field once", f.path, name));
+    out.fields.push_back(name);
+  }
+  r.finish();
+}
+
+CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& base_dir) {
+  CaseSpec spec;
+  MapReader top(src, Field{root, ""}, "a map of case keys (name, description, source, dp, domain, time, ...)");
+  spec.name = top.name("name", "the case name: " + name_form);
+  spec.description = top.text("description", "a one-line description of the case");
+  spec.source = top.text("source", "where the geometry and data come from (paper, experiment)");
+  spec.dp = top.number("dp", positive, "a positive number (particle spacing in metres)");
+  spec.domain = top.rect("domain", rect_form + " (particles leaving it are removed)");
+  read_time(top.map("time", "a map {end, dt or cfl, dt_max} in seconds"), spec.time);
+  spec.gravity = top.vec("gravity", Vec::Zero(), "a vector [gx, gy] in m/s2");
+  read_materials(top.map("materials", "a map of materials, e.g. water: {type: fluid, rho: 1000, nu: 1.0e-6}"), spec);
+
+  std::map<std::string, std::string> body_and_wall_names;
+  GeometryFields geometry;
+  read_bodies(top, spec, body_and_wall_names, geometry);
+  read_walls(top, spec, body_and_wall_names, geometry);
+  check_body_materials(src, spec, geometry);
+  check_geometry(src, spec, geometry, top.at("dp"));
+
+  read_tank_motion(top.optional_map("tank_motion", "a map {type: none | sine_roll | table, ...}"), base_dir, spec);
+  read_coupling(top.optional_map("coupling", "a map {subcycles}"), spec.coupling);
+  read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.fluid);
+  read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt}"), spec.solid);
+  read_probes(top, spec);
+  read_output(top.optional_map("output", "a map {interval, fields}"), spec.output);
+  top.finish();
+  return spec;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Loading and overrides.
+
+YAML::Node load_yaml(const std::string& text, const std::string& file) {
+  std::vector<YAML::Node> documents;
+  try {
+    documents = YAML::LoadAll(text);
+  } catch (const YAML::Exception& e) {
+    const std::string where = e.mark.is_null() ? file : fmt::format("{}:{}", file, e.mark.line + 1);
+    throw CaseError(fmt::format("{}: YAML syntax error: {}; expected valid YAML (indent with spaces, not tabs)", where, e.msg));
+  }
+  if (documents.size() > 1)
+    throw CaseError(fmt::format("{}:{}: a second YAML document; expected one document per case file", file,
+                                documents[1].Mark().line + 1));
+  YAML::Node root;
+  if (!documents.empty() && !documents[0].IsNull()) root.reset(documents[0]);
+  else root.reset(YAML::Node(YAML::NodeType::Map));
+  return root;
+}
+
+std::vector<std::string> split(const std::string& s, const char separator) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const auto end = s.find(separator, start);
+    parts.push_back(s.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) return parts;
+    start = end + 1;
+  }
+}
+
+bool has_key(const YAML::Node& map, const std::string& key) {
+  for (const auto& kv : map)
+    if (kv.first.IsScalar() && kv.first.Scalar() == key) return true;
+  return false;
+}
+
+/// Applies one "dotted.key=value" override to the tree (see docs/case-format.md).
+void apply_override(YAML::Node& root, const std::string& text, Source& src) {
+  const auto fail = [&](const std::string& message) {
+    throw CaseError(fmt::format("{} (--set {}): {}", src.file(), text, message));
+  };
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) fail("expected dotted.key=value, e.g. --set time.end=0.5");
+  const std::string key = trim(text.substr(0, eq));
+  const std::string value_text = text.substr(eq + 1);
+  const std::vector<std::string> segments = split(key, '.');
+  if (std::any_of(segments.begin(), segments.end(), [](const std::string& s) { return s.empty(); }))
+    fail(fmt::format("'{}' is not a dotted key; expected keys separated by single dots, e.g. bodies.column.velocity", key));
+  YAML::Node value;
+  try {
+    value.reset(YAML::Load(value_text));
+  } catch (const YAML::Exception& e) {
+    fail(fmt::format("the value '{}' is not valid YAML ({}); expected a YAML value, e.g. 0.5, [0, 0] or auto", value_text,
+                     e.msg));
+  }
+
+  YAML::Node node(root);
+  std::string path;
+  std::string created;  // path of the first node the override creates
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    const std::string& segment = segments[s];
+    const bool last = s + 1 == segments.size();
+    YAML::Node next;
+    if (node.IsSequence()) {
+      std::size_t index = node.size();
+      if (is_digits(segment)) {
+        index = segment.size() <= 9 ? std::stoul(segment) : node.size();
+        if (index >= node.size())
+          fail(fmt::format("index {} is out of range: {} has {} element(s)", segment, show_path(path), node.size()));
+      } else {
+        std::vector<std::string> names;
+        for (std::size_t i = 0; i < node.size(); ++i) {
+          const YAML::Node item = node[i];
+          if (!item.IsMap()) continue;
+          for (const auto& kv : item) {
+            if (!kv.first.IsScalar() || kv.first.Scalar() != "name" || !kv.second.IsScalar()) continue;
+            names.push_back(kv.second.Scalar());
+            if (kv.second.Scalar() == segment && index == node.size()) index = i;
+          }
+        }
+        if (index == node.size())
+          fail(fmt::format("{} has no element named '{}'; expected an index (0 to {}) or one of the names: {}",
+                           show_path(path), segment, node.size() == 0 ? 0 : node.size() - 1,
+                           names.empty() ? std::string("(none)") : join(names)));
+      }
+      path = item_path(path, index);
+      if (last) node[index] = value;
+      else next.reset(node[index]);
+    } else if (node.IsMap() || node.IsNull()) {
+      const bool exists = node.IsMap() && has_key(node, segment);
+      path = child_path(path, segment);
+      if (!exists && created.empty()) created = path;
+      if (last) {
+        node[segment] = value;
+      } else {
+        if (!exists) node[segment] = YAML::Node(YAML::NodeType::Map);
+        next.reset(node[segment]);
+      }
+    } else {
+      fail(fmt::format("{} is a single value ({}), so it has no key '{}'; expected a path to a key of the case",
+                       show_path(path), show(node), segment));
+    }
+    if (!last) node.reset(next);
+  }
+  src.add_override({text, created.empty() ? path : created});
+}
+
+std::string emit(const YAML::Node& root) {
+  YAML::Emitter out;
+  out << root;
+  return std::string(out.c_str()) + "\n";
+}
+
+CaseSpec parse(const std::string& text, const std::string& file, const fs::path& base_dir,
+               const std::vector<std::string>& overrides) {
+  Source src(file);
+  try {
+    YAML::Node root = load_yaml(text, file);
+    if (!root.IsMap())
+      src.expected(Field{root, ""}, "a map of case keys (name, description, source, dp, domain, time, ...)");
+    for (const auto& o : overrides) apply_override(root, o, src);
+    CaseSpec spec = read_case(src, root, base_dir);
+    spec.file = file;
+    spec.resolved_yaml = emit(root);
+    return spec;
+  } catch (const YAML::Exception& e) {
+    // Safety net: the reader checks node types before use, so this is not expected.
+    const std::string where = e.mark.is_null() ? file : fmt::format("{}:{}", file, e.mark.line + 1);
+    throw CaseError(fmt::format("{}: {}", where, e.msg));
+  }
+}
+
+}  // namespace
+
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec))
+    throw CaseError(fmt::format("{}: cannot read the case file: {}", path, fs::exists(path, ec) ? "not a regular file" : "no such file"));
+  std::ifstream in(path, std::ios::binary);
+  if (!in.is_open()) throw CaseError(fmt::format("{}: cannot read the case file: cannot open it", path));
+  std::ostringstream text;
+  text << in.rdbuf();
+  const fs::path dir = fs::path(path).parent_path();
+  return parse(text.str(), path, dir.empty() ? fs::path(".") : dir, overrides);
+}
+
+CaseSpec parse_case(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
+  return parse(yaml_text, name, fs::path("."), overrides);
+}
+
+}  // namespace mpsfsi

@@ -49,14 +49,24 @@ namespace {
 /// Names of the point arrays that every frame has; extra fields must not reuse them.
 const char* const core_array_names[] = {"velocity", "kind", "body", "material", "clamped", "global_id"};
 
-/// Collects the error and warning messages a VTK object reports, instead of printing them.
+/// Collects the error and warning messages a VTK object reports, instead of printing them. VTK's
+/// text "ERROR: In <source>, line <n>\n<Class> (0x...): <message>\n" is reduced to <message>.
 class VtkMessageCollector : public vtkCommand {
  public:
   static VtkMessageCollector* New() { return new VtkMessageCollector; }
   void Execute(vtkObject* /*caller*/, unsigned long /*event*/, void* call_data) override {
     if (call_data == nullptr) return;
     std::string message = static_cast<const char*>(call_data);
-    while (!message.empty() && (message.back() == '\n' || message.back() == '\r')) message.pop_back();
+    if (message.rfind("ERROR: In ", 0) == 0 || message.rfind("Warning: In ", 0) == 0) {
+      const std::size_t eol = message.find('\n');
+      message = eol == std::string::npos ? std::string() : message.substr(eol + 1);
+    }
+    const std::size_t object_end = message.find("): ");
+    if (object_end != std::string::npos && message.find(" (0x") < object_end) {
+      message = message.substr(object_end + 3);
+    }
+    while (!message.empty() && std::isspace(static_cast<unsigned char>(message.back()))) message.pop_back();
+    if (message.empty()) return;
     if (!messages.empty()) messages += "; ";
     messages += message;
   }
@@ -293,7 +303,8 @@ std::string VtkSeriesWriter::write(const ParticleSet& particles, const double ti
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->AddObserver(vtkCommand::ErrorEvent, messages);
   writer->AddObserver(vtkCommand::WarningEvent, messages);
-  writer->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, messages);  // "returned failure" report
+  vtkNew<VtkMessageCollector> pipeline_messages;  // only silences the pipeline's "returned failure" dump
+  writer->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, pipeline_messages);
   writer->SetFileName(tmp_path.c_str());
   writer->SetInputData(grid);
   writer->SetDataModeToBinary();

@@ -25,7 +25,6 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -344,7 +343,6 @@ TEST_F(VtkWriterTest, WriterFailureInsideExistingDirectoryThrows) {
     FAIL() << "write onto a directory did not throw";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find((dir_ / "particles_000000.vtu").string()), std::string::npos) << e.what();
-    std::cout << "error message: " << e.what() << "\n";
   }
   EXPECT_EQ(writer.n_frames(), 0u);
   EXPECT_FALSE(fs::exists(writer.pvd_path()));

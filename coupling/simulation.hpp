@@ -1,0 +1,42 @@
+// The run loop (preCICE-style participant loop): per step the driver takes the fluid's stable dt,
+// advances the fluid, advances the solid by N sub-steps of dt/N, checks the state, and writes frames
+// and probes at the output interval. Only this folder sees both the fluid and the solid.
+#pragma once
+
+#include "io/case.hpp"
+#include "io/scene.hpp"
+
+#include <mpi.h>
+
+#include <string>
+
+namespace mpsfsi {
+
+struct RunSettings {
+  std::string output_dir;
+  bool quiet = false;
+  int log_every = 100;   ///< steps between log lines
+};
+
+struct RunSummary {
+  std::size_t n_steps = 0;
+  Real end_time = 0;
+  double wall_seconds = 0;
+  double t_fluid = 0, t_solid = 0, t_output = 0;
+  std::string pvd_path;
+};
+
+/// A run went unstable or left the admissible state; the message is the diagnosis.
+class RunFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Run a case to its end time. Throws RunFailure (after writing the last good frame) when the
+/// state becomes invalid.
+RunSummary run_case(const CaseSpec& spec, Scene scene, const RunSettings& settings, MPI_Comm comm);
+
+/// Sub-steps per fluid step: the case's value, or (auto, 0) the smallest N with dt_fluid / N <= dt_solid.
+int resolve_subcycles(int requested, Real dt_fluid, Real dt_solid);
+
+}  // namespace mpsfsi

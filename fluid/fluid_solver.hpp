@@ -1,0 +1,47 @@
+// The incompressible free-surface fluid of seed 004 §4.1 and §4.3 (semi-implicit MPS), as a
+// participant of the run loop: the driver asks for a stable dt and advances it one step at a time.
+// Trilinos stays behind fluid/pressure_solver.hpp; this header includes none of it.
+#pragma once
+
+#include "core/particles.hpp"
+#include "io/case.hpp"
+
+#include <mpi.h>
+
+#include <memory>
+#include <string>
+
+namespace mpsfsi {
+
+/// What one fluid step did, for the log and the benchmarks.
+struct FluidStepReport {
+  Real dt = 0;
+  int iterations = 0;          ///< pressure-solver iterations
+  Real residual = 0;           ///< achieved relative residual of the pressure solve
+  std::size_t n_surface = 0;   ///< free-surface particles
+  Real max_speed = 0;          ///< largest fluid particle speed after the step [m/s]
+  // Wall time of the phases [s].
+  double t_neighbours = 0, t_assembly = 0, t_setup = 0, t_solve = 0, t_rest = 0;
+};
+
+class FluidSolver {
+ public:
+  /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`. All ranks of `comm`
+  /// construct it and call every member together.
+  FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm);
+  ~FluidSolver();
+  FluidSolver(const FluidSolver&) = delete;
+  FluidSolver& operator=(const FluidSolver&) = delete;
+
+  /// Largest admissible dt now: the fixed dt of the case, or the CFL (eq. 52) and viscous limits.
+  /// `limit`, if given, receives the name of the active limit ("fixed", "cfl", "viscous", "dt_max").
+  Real stable_dt(std::string* limit = nullptr) const;
+  /// One semi-implicit step (seed 004 eq. 16-24) from time t to t + dt.
+  FluidStepReport advance(Real t, Real dt);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mpsfsi

@@ -1,0 +1,40 @@
+// Probes written as CSV, one row per output time: pressure at a point (kernel-averaged), surge-front
+// position, water-column height at the back wall, and the displacement of a point of a body.
+#pragma once
+
+#include "core/particles.hpp"
+#include "io/case.hpp"
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace mpsfsi {
+
+class ProbeWriter {
+ public:
+  /// Opens `path` and writes the header; the displacement probes lock onto the particle of their body
+  /// nearest to the probe position in `particles` (the initial state).
+  ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path);
+  bool empty() const { return probes_.empty(); }
+  /// Append one row at time t.
+  void record(Real t, const ParticleSet& particles);
+  /// Values of the probes now, in the order of the case file (the columns after time).
+  std::vector<Real> evaluate(const ParticleSet& particles) const;
+  /// Column names after "time" (a displacement probe has two: _dx and _dy).
+  const std::vector<std::string>& columns() const { return columns_; }
+
+ private:
+  struct Probe {
+    ProbeSpec spec;
+    GlobalId particle = -1;   ///< displacement probes: the tracked particle
+    Vec initial = Vec::Zero();
+  };
+  Real dp_;
+  Real x_back_ = 0;           ///< the back wall (smallest x of the fluid's container)
+  std::vector<Probe> probes_;
+  std::vector<std::string> columns_;
+  std::ofstream out_;
+};
+
+}  // namespace mpsfsi
