@@ -43,6 +43,8 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size) {
   // Stable counting sort: points keep increasing index order inside a cell.
   std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
   for (std::size_t i = 0; i < n; ++i) sorted_[fill[static_cast<std::size_t>(cell_of_point_[i])]++] = static_cast<LocalIndex>(i);
+  sorted_x_.resize(n);
+  for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[static_cast<std::size_t>(sorted_[k])];
 }
 
 Eigen::Vector2i CellGrid::cell_of(const Vec& x) const {
@@ -54,36 +56,53 @@ Eigen::Vector2i CellGrid::cell_of(const Vec& x) const {
   return c;
 }
 
-void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid) {
+void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
+                          const bool sorted_lists) {
+  constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^2 cells
   const std::size_t n = x.size();
-  grid.build(x, radius);
+  grid.build(x, radius / reach);
   const Real r2 = radius * radius;
   out.radius = radius;
   out.offset.resize(n + 1);
-  out.index.clear();
+  // Keep last step's capacity; the list length changes little from step to step.
+  out.index.resize(out.index.capacity());
   out.offset[0] = 0;
   const int nx = grid.n_cells(0), ny = grid.n_cells(1);
   const auto& sorted = grid.sorted();
-  std::vector<LocalIndex> found;
-  found.reserve(128);
+  const auto& xs = grid.sorted_positions();
+  std::size_t n_pairs = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec xi = x[i];
-    const auto c = grid.cell_of(xi);
-    found.clear();
-    for (int cy = std::max(c[1] - 1, 0); cy <= std::min(c[1] + 1, ny - 1); ++cy) {
-      // Cells (cx-1 .. cx+1, cy) are contiguous in the sorted array.
-      const std::size_t first = grid.cell_start(grid.cell_index(std::max(c[0] - 1, 0), cy));
-      const std::size_t last = grid.cell_start(grid.cell_index(std::min(c[0] + 1, nx - 1), cy) + 1);
+    const auto c = grid.cell_of_point(i);
+    const int cx0 = std::max(c[0] - reach, 0), cx1 = std::min(c[0] + reach, nx - 1);
+    for (int cy = std::max(c[1] - reach, 0); cy <= std::min(c[1] + reach, ny - 1); ++cy) {
+      // The cells cx0 .. cx1 of a row are contiguous in the sorted arrays.
+      const std::size_t first = grid.cell_start(grid.cell_index(cx0, cy));
+      const std::size_t last = grid.cell_start(grid.cell_index(cx1, cy) + 1);
+      if (n_pairs + (last - first) > out.index.size()) out.index.resize(2 * (n_pairs + (last - first)) + 1024);
+      LocalIndex* dst = out.index.data() + n_pairs;
       for (std::size_t k = first; k < last; ++k) {
-        const LocalIndex j = sorted[k];
-        const Vec d = x[static_cast<std::size_t>(j)] - xi;
-        if (d.squaredNorm() < r2 && static_cast<std::size_t>(j) != i) found.push_back(j);
+        const Real dx = xs[k][0] - xi[0], dy = xs[k][1] - xi[1];
+        // Branch-free append: write always, advance only for a neighbour.
+        *dst = sorted[k];
+        dst += (dx * dx + dy * dy < r2) & (static_cast<std::size_t>(sorted[k]) != i);
+      }
+      n_pairs = static_cast<std::size_t>(dst - out.index.data());
+    }
+    out.offset[i + 1] = n_pairs;
+    if (sorted_lists) {
+      // Insertion sort: the lists are short and, for particles kept in cell order, nearly sorted.
+      LocalIndex* a = out.index.data() + out.offset[i];
+      const std::size_t m = n_pairs - out.offset[i];
+      for (std::size_t p = 1; p < m; ++p) {
+        const LocalIndex v = a[p];
+        std::size_t q = p;
+        for (; q > 0 && a[q - 1] > v; --q) a[q] = a[q - 1];
+        a[q] = v;
       }
     }
-    std::sort(found.begin(), found.end());
-    out.index.insert(out.index.end(), found.begin(), found.end());
-    out.offset[i + 1] = out.index.size();
   }
+  out.index.resize(n_pairs);
 }
 
 void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out) {

@@ -10,7 +10,7 @@
 namespace mpsfsi {
 
 /// Neighbours of every particle in CSR form: the neighbours of i are
-/// index[offset[i] .. offset[i+1]), in increasing order of j.
+/// index[offset[i] .. offset[i+1]), in increasing order of j (or in cell order when built unsorted).
 struct NeighbourList {
   Real radius = 0;
   std::vector<std::size_t> offset;  ///< size n + 1
@@ -43,6 +43,13 @@ class CellGrid {
   /// Points in cell c: sorted()[cell_start(c) .. cell_start(c + 1)).
   std::size_t cell_start(const std::size_t c) const { return cell_start_[c]; }
   const std::vector<LocalIndex>& sorted() const { return sorted_; }
+  /// Positions in the order of sorted() (contiguous per cell, for fast scanning).
+  const std::vector<Vec>& sorted_positions() const { return sorted_x_; }
+  /// Cell coordinates of point i as binned by build().
+  Eigen::Vector2i cell_of_point(const std::size_t i) const {
+    const auto c = static_cast<int>(cell_of_point_[i]);
+    return Eigen::Vector2i(c % n_cells_[0], c / n_cells_[0]);
+  }
 
  private:
   Real cell_size_ = 0;
@@ -51,15 +58,20 @@ class CellGrid {
   std::vector<std::size_t> cell_start_;
   std::vector<LocalIndex> sorted_;
   std::vector<LocalIndex> cell_of_point_;
+  std::vector<Vec> sorted_x_;
 };
 
 /// Build the neighbour list of all points for `radius` (strictly closer than radius, j != i).
+/// Cells of side radius / 2 and a 5 x 5 cell stencil: fewer candidates than 3 x 3 cells of side radius.
 /// `grid` is reused between calls to avoid reallocation.
-void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid);
+/// With sorted = false each particle's neighbours come in cell order (a little faster).
+void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid,
+                          bool sorted = true);
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out);
 
 /// A particle order that follows the cells (row by row), for memory locality:
-/// reorder particles with ParticleSet::reorder(cell_order(x, h)).
+/// reorder particles with ParticleSet::reorder(cell_order(x, radius / 2)). With the same cell side
+/// as build_neighbour_list uses (radius / 2), the lists of unmoved particles come out already sorted.
 std::vector<LocalIndex> cell_order(const std::vector<Vec>& x, Real cell_size);
 
 }  // namespace mpsfsi

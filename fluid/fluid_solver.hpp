@@ -1,6 +1,7 @@
-// The incompressible free-surface fluid of seed 004 §4.1 and §4.3 (semi-implicit MPS), as a
-// participant of the run loop: the driver asks for a stable dt and advances it one step at a time.
-// Trilinos stays behind fluid/pressure_solver.hpp; this header includes none of it.
+// The incompressible free-surface fluid of seed 004 §4.1 and §4.3 (semi-implicit MPS, eq. 7-24), as a
+// participant of the run loop: the driver asks for a stable dt (eq. 52 plus the viscous limit) and
+// advances it one step at a time. Trilinos stays behind fluid/pressure_solver.hpp; this header
+// includes none of it.
 #pragma once
 
 #include "core/particles.hpp"
@@ -20,15 +21,29 @@ struct FluidStepReport {
   Real residual = 0;           ///< achieved relative residual of the pressure solve
   std::size_t n_surface = 0;   ///< free-surface particles
   Real max_speed = 0;          ///< largest fluid particle speed after the step [m/s]
+  std::size_t n_rows = 0;      ///< rows of the pressure system (fluid + wall particles)
+  std::size_t n_removed = 0;   ///< fluid particles removed this step because they left the domain
   // Wall time of the phases [s].
   double t_neighbours = 0, t_assembly = 0, t_setup = 0, t_solve = 0, t_rest = 0;
+};
+
+/// Numerical choices that are not (yet) in the case file.
+struct FluidOptions {
+  Real collision_distance = 0.5;   ///< collision model: pairs closer than this x dp (mps-practice notes)
+  Real restitution = 0.2;          ///< collision model: restitution coefficient
+  int reorder_every = 20;          ///< cell-order the particles every N steps (0: never; skipped with solids)
+  int muelu_rebuild_every = 10;    ///< MueLu: full hierarchy setup every N steps, reuse in between
+  Real viscous_number = 0.2;       ///< viscous limit dt <= viscous_number dp^2 / nu
+  /// Solid particles take part as boundary particles with prescribed position and velocity (PPE rows,
+  /// number density, collisions), like wall particles. Off: solids are ignored by the fluid.
+  bool solid_as_boundary = false;
 };
 
 class FluidSolver {
  public:
   /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`. All ranks of `comm`
   /// construct it and call every member together.
-  FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm);
+  FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options = {});
   ~FluidSolver();
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;
@@ -38,6 +53,9 @@ class FluidSolver {
   Real stable_dt(std::string* limit = nullptr) const;
   /// One semi-implicit step (seed 004 eq. 16-24) from time t to t + dt.
   FluidStepReport advance(Real t, Real dt);
+
+  /// Bytes held by the fluid's work arrays, neighbour list, matrix and preconditioner on this rank.
+  std::size_t memory_bytes() const;
 
  private:
   struct Impl;

@@ -76,6 +76,17 @@ std::string trim(const std::string& s) {
   return s.substr(first, last - first + 1);
 }
 
+std::vector<std::string> split(const std::string& s, const char separator) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const auto end = s.find(separator, start);
+    parts.push_back(s.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) return parts;
+    start = end + 1;
+  }
+}
+
 bool is_digits(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](const unsigned char c) { return std::isdigit(c); });
 }
@@ -142,7 +153,9 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 }
 
 bool looks_like(const std::string& typo, const std::string& key) {
-  return edit_distance(typo, key) <= (key.size() <= 4 ? 1u : 2u);
+  const std::size_t allowed = key.size() <= 4 ? 1 : 2;
+  const std::size_t length_difference = typo.size() > key.size() ? typo.size() - key.size() : key.size() - typo.size();
+  return length_difference <= allowed && edit_distance(typo, key) <= allowed;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -848,8 +861,13 @@ YAML::Node load_yaml(const std::string& text, const std::string& file) {
   try {
     documents = YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
-    const std::string where = e.mark.is_null() ? file : fmt::format("{}:{}", file, e.mark.line + 1);
-    throw CaseError(fmt::format("{}: YAML syntax error: {}; expected valid YAML (indent with spaces, not tabs)", where, e.msg));
+    if (e.mark.is_null()) throw CaseError(fmt::format("{}: YAML syntax error: {}; expected valid YAML", file, e.msg));
+    // Tabs are the most common cause: YAML indents with spaces only.
+    const std::vector<std::string> lines = split(text, '\n');
+    const auto line = static_cast<std::size_t>(e.mark.line);
+    const bool has_tab = line < lines.size() && lines[line].find('\t') != std::string::npos;
+    throw CaseError(fmt::format("{}:{}: YAML syntax error: {}; expected valid YAML{}", file, e.mark.line + 1, e.msg,
+                                has_tab ? " (this line has a tab: indent with spaces)" : ""));
   }
   if (documents.size() > 1)
     throw CaseError(fmt::format("{}:{}: a second YAML document; expected one document per case file", file,
@@ -858,17 +876,6 @@ YAML::Node load_yaml(const std::string& text, const std::string& file) {
   if (!documents.empty() && !documents[0].IsNull()) root.reset(documents[0]);
   else root.reset(YAML::Node(YAML::NodeType::Map));
   return root;
-}
-
-std::vector<std::string> split(const std::string& s, const char separator) {
-  std::vector<std::string> parts;
-  std::size_t start = 0;
-  while (true) {
-    const auto end = s.find(separator, start);
-    parts.push_back(s.substr(start, end == std::string::npos ? std::string::npos : end - start));
-    if (end == std::string::npos) return parts;
-    start = end + 1;
-  }
 }
 
 bool has_key(const YAML::Node& map, const std::string& key) {

@@ -1,1 +1,592 @@
-// placeholder
+// Tests of the case-file parser (io/case_file.cpp): a valid case gives the expected numbers, every
+// kind of bad input gives a CaseError naming file, line, key and expected form, --set overrides,
+// and a fuzz test (mutated case files either parse or throw CaseError, nothing else).
+#include "io/case.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace mpsfsi;
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+namespace {
+
+const std::string valid_path = std::string(MPSFSI_TEST_DATA_DIR) + "/valid_case.yaml";
+const std::string file_name = "cases/x.yaml";
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const std::string& valid_text() {
+  static const std::string text = read_text(valid_path);
+  return text;
+}
+
+/// `text` with the first occurrence of `from` (which must occur) replaced by `to`.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << "test bug: '" << from << "' is not in the text";
+  if (pos != std::string::npos) text.replace(pos, from.size(), to);
+  return text;
+}
+
+/// The valid case with one replacement.
+std::string valid_with(const std::string& from, const std::string& to) { return replaced(valid_text(), from, to); }
+
+/// The 1-based number of the line of `text` where `needle` first occurs.
+long line_of(const std::string& text, const std::string& needle) {
+  const auto pos = text.find(needle);
+  EXPECT_NE(pos, std::string::npos) << "test bug: '" << needle << "' not found";
+  if (pos == std::string::npos) return 0;
+  return 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n');
+}
+
+/// "cases/x.yaml:N:" with N = line_of(text, needle).
+std::string at_line(const std::string& text, const std::string& needle) {
+  return file_name + ":" + std::to_string(line_of(text, needle)) + ":";
+}
+
+/// The CaseError message of parsing `text`, or "(no error)".
+std::string error_of(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  try {
+    parse_case(text, file_name, overrides);
+  } catch (const CaseError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+constexpr double deg = 3.14159265358979323846 / 180;
+
+const char* const minimal_case = R"(name: minimal
+description: one fluid block
+source: tests
+dp: 0.01
+domain: {min: [0, 0], max: [1, 1]}
+time: {end: 0.5, dt: 1.0e-4}
+materials:
+  water: {type: fluid, rho: 1000, nu: 1.0e-6}
+bodies:
+  - {name: block, kind: fluid, material: water, rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}}
+)";
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Valid input.
+
+TEST(CaseFile, ValidCaseGivesTheExpectedValues) {
+  const CaseSpec c = load_case(valid_path);
+  EXPECT_EQ(c.file, valid_path);
+  EXPECT_EQ(c.name, "test_case");
+  EXPECT_EQ(c.description, "Water column and an elastic plate in a rolling open tank");
+  EXPECT_DOUBLE_EQ(c.dp, 0.004);
+  EXPECT_DOUBLE_EQ(c.domain.lo[0], -0.1);
+  EXPECT_DOUBLE_EQ(c.domain.hi[1], 0.8);
+  EXPECT_DOUBLE_EQ(c.time.end, 1.0);
+  EXPECT_FALSE(c.time.dt);
+  ASSERT_TRUE(c.time.cfl);
+  EXPECT_DOUBLE_EQ(*c.time.cfl, 0.2);
+  EXPECT_DOUBLE_EQ(c.time.dt_max, 1e-3);
+  EXPECT_DOUBLE_EQ(c.gravity[1], -9.81);
+
+  ASSERT_EQ(c.fluid_materials.size(), 1u);
+  ASSERT_EQ(c.solid_materials.size(), 1u);
+  EXPECT_EQ(c.fluid_material_index("water"), 0);
+  EXPECT_EQ(c.solid_material_index("rubber"), 0);
+  EXPECT_EQ(c.fluid_material_index("rubber"), -1);
+  EXPECT_EQ(c.solid_material_index("nothing"), -1);
+  EXPECT_DOUBLE_EQ(c.solid_materials[0].E, 1.2e7);
+  ASSERT_TRUE(c.solid_materials[0].fracture_strain);
+  EXPECT_DOUBLE_EQ(*c.solid_materials[0].fracture_strain, 0.2);
+
+  ASSERT_EQ(c.bodies.size(), 2u);
+  EXPECT_EQ(c.bodies[0].kind, BodyKind::fluid);
+  EXPECT_EQ(c.bodies[1].kind, BodyKind::solid);
+  EXPECT_EQ(c.bodies[1].material, "rubber");
+  EXPECT_DOUBLE_EQ(c.bodies[1].rect.hi[0], 0.412);
+  ASSERT_TRUE(c.bodies[1].clamp);
+  EXPECT_DOUBLE_EQ(c.bodies[1].clamp->hi[1], 0.032);
+  EXPECT_FALSE(c.bodies[0].clamp);
+
+  ASSERT_EQ(c.walls.size(), 2u);
+  EXPECT_EQ(c.walls[0].type, WallType::box);
+  EXPECT_TRUE(c.walls[0].open_top);
+  EXPECT_EQ(c.walls[1].type, WallType::block);
+
+  EXPECT_EQ(c.tank_motion.type, TankMotionType::sine_roll);
+  EXPECT_NEAR(c.tank_motion.amplitude, 4 * deg, 1e-15);
+  EXPECT_DOUBLE_EQ(c.tank_motion.period, 1.2);
+  EXPECT_DOUBLE_EQ(c.tank_motion.pivot[0], 0.3);
+
+  EXPECT_EQ(c.coupling.subcycles, 0);  // auto
+  EXPECT_EQ(c.fluid.gradient, "corrected");
+  EXPECT_EQ(c.fluid.solver, "gmres");
+  EXPECT_EQ(c.fluid.preconditioner, "ilu");
+  EXPECT_EQ(c.fluid.max_iterations, 300);
+  EXPECT_DOUBLE_EQ(c.fluid.beta2, 0.85);  // default
+  EXPECT_DOUBLE_EQ(c.solid.re, 2.1);
+  EXPECT_FALSE(c.solid.dt);
+
+  ASSERT_EQ(c.probes.size(), 4u);
+  EXPECT_EQ(c.probes[1].type, ProbeType::displacement);
+  EXPECT_EQ(c.probes[1].body, "plate");
+  EXPECT_EQ(c.probes[2].type, ProbeType::surge_front);
+  EXPECT_EQ(c.probes[3].type, ProbeType::column_height);
+  EXPECT_DOUBLE_EQ(c.output.interval, 0.02);
+  EXPECT_EQ(c.output.fields, (std::vector<std::string>{"pressure", "velocity"}));
+
+  // The resolved YAML is itself a valid case with the same values.
+  const CaseSpec again = parse_case(c.resolved_yaml, "resolved.yaml");
+  EXPECT_DOUBLE_EQ(again.dp, c.dp);
+  EXPECT_EQ(again.bodies.size(), c.bodies.size());
+  EXPECT_EQ(again.coupling.subcycles, 0);
+}
+
+TEST(CaseFile, MinimalCaseGetsTheDefaults) {
+  const CaseSpec c = parse_case(minimal_case, "minimal.yaml");
+  EXPECT_EQ(c.file, "minimal.yaml");
+  EXPECT_TRUE(c.gravity.isZero());
+  ASSERT_TRUE(c.time.dt);
+  EXPECT_DOUBLE_EQ(*c.time.dt, 1e-4);
+  EXPECT_FALSE(c.time.cfl);
+  EXPECT_DOUBLE_EQ(c.fluid_materials[0].c, FluidMaterial{}.c);
+  EXPECT_DOUBLE_EQ(c.fluid_materials[0].kappa, FluidMaterial{}.kappa);
+  EXPECT_TRUE(c.walls.empty());
+  EXPECT_TRUE(c.probes.empty());
+  EXPECT_EQ(c.tank_motion.type, TankMotionType::none);
+  EXPECT_EQ(c.coupling.subcycles, 1);
+  EXPECT_EQ(c.fluid.solver, "cg");
+  EXPECT_EQ(c.fluid.preconditioner, "muelu");
+  EXPECT_DOUBLE_EQ(c.fluid.re_laplacian, 4.0);
+  EXPECT_DOUBLE_EQ(c.output.interval, 0.01);
+  EXPECT_TRUE(c.output.fields.empty());
+  EXPECT_TRUE(c.bodies[0].velocity.isZero());
+}
+
+TEST(CaseFile, TableMotionFileIsResolvedRelativeToTheCaseFile) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "mpsfsi_test_case_file_table";
+  fs::create_directories(dir);
+  std::ofstream(dir / "roll.csv") << "0,0\n1,4\n";
+  const std::string text = valid_with("  type: sine_roll\n  pivot: [0.3, 0]\n  amplitude_deg: 4\n  period: 1.2\n",
+                                      "  type: table\n  pivot: [0.3, 0]\n  file: roll.csv\n");
+  std::ofstream(dir / "case.yaml") << text;
+  const CaseSpec c = load_case((dir / "case.yaml").string());
+  EXPECT_EQ(c.tank_motion.type, TankMotionType::table);
+  EXPECT_TRUE(fs::equivalent(c.tank_motion.file, dir / "roll.csv"));
+
+  // parse_case resolves relative to the current directory, where there is no roll.csv.
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, HasSubstr(at_line(text, "file: roll.csv")));
+  EXPECT_THAT(msg, HasSubstr("tank_motion.file = roll.csv: no such file"));
+  EXPECT_THAT(msg, HasSubstr("expected a CSV file"));
+  fs::remove_all(dir);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input: each message names the file, the line, the key and the expected form.
+
+TEST(CaseFileErrors, MissingFile) {
+  try {
+    load_case("/nonexistent/dir/case.yaml");
+    FAIL() << "no error";
+  } catch (const CaseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("/nonexistent/dir/case.yaml"));
+    EXPECT_THAT(e.what(), HasSubstr("no such file"));
+  }
+}
+
+TEST(CaseFileErrors, UnknownKeyAtTopLevel) {
+  const std::string text = valid_with("gravity:", "colour: red\ngravity:");
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, StartsWith(at_line(text, "colour:")));
+  EXPECT_THAT(msg, HasSubstr("unknown key 'colour' in (top level); expected one of: name, description, source, dp"));
+  EXPECT_THAT(msg, HasSubstr("probes, output"));
+}
+
+TEST(CaseFileErrors, TypoOfARequiredKey) {
+  const std::string text = valid_with("time:", "tme:");
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, StartsWith(at_line(text, "tme:")));
+  EXPECT_THAT(msg, HasSubstr("unknown key 'tme' in (top level); did you mean 'time'?"));
+}
+
+TEST(CaseFileErrors, UnknownKeyNested) {
+  const std::string text = valid_with("    angular_velocity: 0", "    angular_velocity: 0\n    colour: red");
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, StartsWith(at_line(text, "colour:")));
+  EXPECT_THAT(msg, HasSubstr("unknown key 'colour' in bodies[1]; expected one of: name, kind, material, rectangle"));
+
+  const std::string text2 = valid_with("  beta1: 0.97", "  beta3: 0.97");
+  const std::string msg2 = error_of(text2);
+  EXPECT_THAT(msg2, StartsWith(at_line(text2, "beta3")));
+  EXPECT_THAT(msg2, HasSubstr("unknown key 'beta3' in fluid; expected one of: re_gradient"));
+  EXPECT_THAT(msg2, HasSubstr("(did you mean 'beta"));
+
+  // A key of the other material type.
+  const std::string text3 = valid_with("c: 20,", "E: 20,");
+  EXPECT_THAT(error_of(text3), HasSubstr("unknown key 'E' in materials.water; expected one of: type, rho, nu, c, kappa"));
+}
+
+TEST(CaseFileErrors, MissingKey) {
+  const std::string text = valid_with("  end: 1.0\n", "");
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, StartsWith(at_line(text, "time:")));
+  EXPECT_THAT(msg, HasSubstr("missing key 'end' in time; expected: time.end, a positive number [s]"));
+
+  const std::string text2 = valid_with("    material: rubber\n", "");
+  EXPECT_THAT(error_of(text2), HasSubstr("missing key 'material' in bodies[1]; expected: bodies[1].material"));
+
+  const std::string msg3 = error_of(valid_with("dp: 0.004\n", ""));
+  EXPECT_THAT(msg3, HasSubstr("missing key 'dp' in (top level); expected: dp, a positive number (particle spacing in metres)"));
+}
+
+TEST(CaseFileErrors, StringWhereANumberIsExpected) {
+  const std::string text = valid_with("dp: 0.004", "dp: abc");
+  EXPECT_EQ(error_of(text), at_line(text, "dp:") + " dp = abc: expected a positive number (particle spacing in metres)");
+  // A quoted number is a string.
+  EXPECT_THAT(error_of(valid_with("dp: 0.004", "dp: \"0.004\"")), HasSubstr("dp = \"0.004\": expected a positive number"));
+  const std::string text2 = valid_with("period: 1.2", "period: soon");
+  EXPECT_THAT(error_of(text2), StartsWith(at_line(text2, "period:")));
+  EXPECT_THAT(error_of(text2), HasSubstr("tank_motion.period = soon: expected a positive number"));
+}
+
+TEST(CaseFileErrors, ScalarWhereAListIsExpected) {
+  const std::string text = valid_with("gravity: [0, -9.81]", "gravity: 5");
+  EXPECT_EQ(error_of(text), at_line(text, "gravity:") + " gravity = 5: expected a vector [gx, gy] in m/s2");
+  const std::string text2 = replaced(minimal_case, "bodies:\n", "bodies: 3\nold_bodies:\n");
+  EXPECT_THAT(error_of(text2), HasSubstr(at_line(text2, "bodies:") + " bodies = 3: expected a list of bodies"));
+  const std::string text3 = valid_with("time:\n", "time: 1\ntimex:\n");
+  EXPECT_THAT(error_of(text3), HasSubstr("time = 1: expected a map {end, dt or cfl, dt_max}"));
+}
+
+TEST(CaseFileErrors, VectorWithThreeComponents) {
+  const std::string text = valid_with("gravity: [0, -9.81]", "gravity: [0, -9.81, 0]");
+  EXPECT_EQ(error_of(text), at_line(text, "gravity:") + " gravity = [0, -9.81, 0]: expected a vector [gx, gy] in m/s2");
+  const std::string text2 = valid_with("pivot: [0.3, 0]", "pivot: [0.3, 0, 1]");
+  EXPECT_THAT(error_of(text2), HasSubstr("tank_motion.pivot = [0.3, 0, 1]: expected a point [x, y] in metres"));
+}
+
+TEST(CaseFileErrors, OutOfRangeValues) {
+  const std::string text = valid_with("dp: 0.004", "dp: -0.004");
+  EXPECT_EQ(error_of(text), at_line(text, "dp:") + " dp = -0.004: expected a positive number (particle spacing in metres)");
+  EXPECT_THAT(error_of(valid_with("dp: 0.004", "dp: 0")), HasSubstr("dp = 0: expected a positive number"));
+  EXPECT_THAT(error_of(valid_with("dp: 0.004", "dp: 1e400")), HasSubstr("dp = 1e400: expected a positive number"));
+  EXPECT_THAT(error_of(valid_with("dp: 0.004", "dp: .nan")), HasSubstr("dp = .nan: expected a positive number"));
+  EXPECT_THAT(error_of(valid_with("cfl: 0.2", "cfl: 1.5")), HasSubstr("time.cfl = 1.5: expected a Courant number C with 0 < C <= 1"));
+  EXPECT_THAT(error_of(valid_with("nu: 0.4", "nu: 0.5")), HasSubstr("materials.rubber.nu = 0.5: expected a number in (-1, 0.5)"));
+  EXPECT_THAT(error_of(valid_with("amplitude_deg: 4", "amplitude_deg: 95")),
+              HasSubstr("tank_motion.amplitude_deg = 95: expected a number of degrees in (0, 90)"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: 0")),
+              HasSubstr("coupling.subcycles = 0: expected a positive integer or auto"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: 2.5")),
+              HasSubstr("coupling.subcycles = 2.5: expected a positive integer or auto"));
+  EXPECT_THAT(error_of(valid_with("solver: gmres", "solver: bicgstab")),
+              HasSubstr("fluid.solver = bicgstab: expected one of: cg, gmres"));
+  EXPECT_THAT(error_of(valid_with("open_top: true", "open_top: maybe")),
+              HasSubstr("walls[0].open_top = maybe: expected true or false"));
+  EXPECT_THAT(error_of(valid_with("max: [0.2, 0.4]", "max: [0.2, -0.4]")),
+              HasSubstr("bodies[0].rectangle = {min: [0, 0], max: [0.2, -0.4]}: expected max > min in both components"));
+}
+
+TEST(CaseFileErrors, TimeStepChoice) {
+  const std::string both = valid_with("  cfl: 0.2\n", "  cfl: 0.2\n  dt: 1.0e-4\n");
+  EXPECT_THAT(error_of(both), HasSubstr("both dt and cfl are given; expected exactly one of time.dt"));
+  const std::string neither = valid_with("  cfl: 0.2\n", "");
+  EXPECT_THAT(error_of(neither), StartsWith(at_line(neither, "time:")));
+  EXPECT_THAT(error_of(neither), HasSubstr("missing key 'dt' or 'cfl' in time"));
+}
+
+TEST(CaseFileErrors, OverlappingBodies) {
+  const std::string text = valid_with("min: [0.4, 0.02], max: [0.412, 0.2]", "min: [0.15, 0.02], max: [0.162, 0.2]");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg, at_line(text, "min: [0.15, 0.02]") +
+                     " bodies[1].rectangle overlaps bodies[0].rectangle ('column'): bodies must not overlap");
+  // Touching edges do not overlap.
+  const std::string touching = std::string(minimal_case) +
+                               "  - {name: b2, kind: fluid, material: water, rectangle: {min: [0.3, 0.1], max: [0.5, 0.3]}}\n";
+  EXPECT_EQ(error_of(touching), "(no error)");
+  EXPECT_EQ(error_of(valid_with("max: [0.2, 0.4]", "max: [0.38, 0.4]")), "(no error)");  // touches the block
+}
+
+TEST(CaseFileErrors, BodyOverlapsABlock) {
+  const std::string text = valid_with("min: [0.4, 0.02], max: [0.412, 0.2]", "min: [0.4, 0.01], max: [0.412, 0.2]");
+  EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "min: [0.4, 0.01]") +
+                                        " bodies[1].rectangle overlaps walls[1].rectangle ('step'): bodies must not overlap walls"));
+}
+
+TEST(CaseFileErrors, BodyOutsideItsTank) {
+  const std::string text = valid_with("min: [0, 0], max: [0.2, 0.4]", "min: [-0.05, 0], max: [0.2, 0.4]");
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, StartsWith(at_line(text, "min: [-0.05, 0]")));
+  EXPECT_THAT(msg, HasSubstr("bodies[0].rectangle = {min: [-0.05, 0], max: [0.2, 0.4]} lies outside walls[0].rectangle ('tank')"));
+  EXPECT_THAT(msg, HasSubstr("expected bodies inside the tank"));
+  // Above an open tank is fine, above a closed one is not.
+  const std::string high = valid_with("max: [0.2, 0.4]", "max: [0.2, 0.7]");
+  EXPECT_EQ(error_of(high), "(no error)");
+  EXPECT_THAT(error_of(replaced(high, "open_top: true", "open_top: false")), HasSubstr("lies outside walls[0].rectangle"));
+}
+
+TEST(CaseFileErrors, BodyOutsideTheDomain) {
+  const std::string text = valid_with("domain: {min: [-0.1, -0.1], max: [0.7, 0.8]}", "domain: {min: [0.1, -0.1], max: [0.7, 0.8]}");
+  EXPECT_THAT(error_of(text), HasSubstr("bodies[0].rectangle = {min: [0, 0], max: [0.2, 0.4]} lies outside the domain"));
+}
+
+TEST(CaseFileErrors, UnknownMaterial) {
+  const std::string text = valid_with("material: water", "material: oil");
+  EXPECT_EQ(error_of(text),
+            at_line(text, "material: oil") + " bodies[0].material = oil: unknown material; expected a fluid material (one of: water)");
+}
+
+TEST(CaseFileErrors, MaterialOfTheWrongType) {
+  const std::string text = valid_with("material: rubber", "material: water");
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, StartsWith(at_line(text, "material: water\n    rectangle: {min: [0.4")));
+  EXPECT_THAT(msg, HasSubstr("bodies[1].material = water: 'water' is a fluid material but the body is solid; expected a "
+                             "solid material (one of: rubber)"));
+}
+
+TEST(CaseFileErrors, ClampOnAFluidBody) {
+  const std::string text =
+      valid_with("max: [0.2, 0.4]}\n", "max: [0.2, 0.4]}\n    clamp: {min: [0, 0], max: [0.2, 0.01]}\n");
+  EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "clamp: {min: [0, 0]") +
+                                        " bodies[0].clamp: a fluid body cannot be clamped; expected clamp only on solid bodies"));
+}
+
+TEST(CaseFileErrors, ProbeOfAnUnknownBody) {
+  const std::string text = valid_with("body: plate", "body: plank");
+  EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "body: plank") +
+                                        " probes[1].body = plank: unknown body; expected the name of a solid body (one of: plate)"));
+  EXPECT_THAT(error_of(valid_with("body: plate", "body: column")), HasSubstr("'column' is a fluid body"));
+  EXPECT_THAT(error_of(valid_with(", body: plate", "")), HasSubstr("missing key 'body' in probes[1]"));
+}
+
+TEST(CaseFileErrors, DuplicateNames) {
+  const std::string text = valid_with("name: plate", "name: column");
+  EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "name: column\n    kind: solid") +
+                                        " bodies[1].name = column: duplicate name (also bodies[0].name); expected a name "
+                                        "unique among bodies and walls"));
+  EXPECT_THAT(error_of(valid_with("name: step", "name: plate")), HasSubstr("walls[1].name = plate: duplicate name"));
+  EXPECT_THAT(error_of(valid_with("name: h1", "name: p1")), HasSubstr("probes[3].name = p1: duplicate name"));
+  const std::string dup_key = valid_with("dp: 0.004\n", "dp: 0.004\ndp: 0.005\n");
+  EXPECT_THAT(error_of(dup_key), HasSubstr(at_line(dup_key, "dp: 0.005") + " duplicate key 'dp' in (top level) (first given at line"));
+}
+
+TEST(CaseFileErrors, YamlSyntaxError) {
+  const std::string text = valid_with("gravity: [0, -9.81]", "gravity: [0, -9.81");
+  const std::string msg = error_of(text);
+  EXPECT_THAT(msg, StartsWith(file_name + ":"));
+  EXPECT_THAT(msg, HasSubstr("YAML syntax error"));
+  EXPECT_THAT(msg, HasSubstr("expected valid YAML"));
+  const std::string tab = valid_with("  end: 1.0", "\tend: 1.0");
+  EXPECT_THAT(error_of(tab), StartsWith(at_line(tab, "\tend")));
+  EXPECT_THAT(error_of(tab), HasSubstr("this line has a tab: indent with spaces"));
+  EXPECT_THAT(error_of("a: b: c\n"), StartsWith(file_name + ":1: YAML syntax error"));
+}
+
+TEST(CaseFileErrors, NotAMapOrEmpty) {
+  EXPECT_THAT(error_of("- 1\n- 2\n"), HasSubstr("(top level) = [1, 2]: expected a map of case keys"));
+  EXPECT_THAT(error_of(""), HasSubstr("missing key 'name' in (top level)"));
+  EXPECT_THAT(error_of("# only a comment\n"), HasSubstr("missing key 'name'"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// --set overrides.
+
+TEST(CaseFileOverrides, ValuesListsIndexesNames) {
+  const CaseSpec c = parse_case(valid_text(), file_name,
+                                {"time.end=0.5", "gravity=[0,0]", "bodies.0.velocity=[1, 0]",
+                                 "bodies.plate.angular_velocity=2", "coupling.subcycles=4", "materials.water.rho=998",
+                                 "fluid.solver=cg", "walls.tank.open_top=false", "probes.p1.position=[0.5, 0.02]"});
+  EXPECT_DOUBLE_EQ(c.time.end, 0.5);
+  EXPECT_TRUE(c.gravity.isZero());
+  EXPECT_DOUBLE_EQ(c.bodies[0].velocity[0], 1.0);
+  EXPECT_DOUBLE_EQ(c.bodies[1].angular_velocity, 2.0);
+  EXPECT_EQ(c.coupling.subcycles, 4);
+  EXPECT_DOUBLE_EQ(c.fluid_materials[0].rho, 998);
+  EXPECT_EQ(c.fluid.solver, "cg");
+  EXPECT_FALSE(c.walls[0].open_top);
+  EXPECT_DOUBLE_EQ(c.probes[0].position[0], 0.5);
+  EXPECT_THAT(c.resolved_yaml, HasSubstr("end: 0.5"));
+  EXPECT_THAT(c.resolved_yaml, HasSubstr("rho: 998"));
+
+  EXPECT_EQ(parse_case(minimal_case, file_name, {"coupling.subcycles=auto"}).coupling.subcycles, 0);
+  EXPECT_EQ(parse_case(valid_text(), file_name, {"coupling.subcycles=7"}).coupling.subcycles, 7);
+  // A later override wins; ~ removes an optional key.
+  const CaseSpec d = parse_case(valid_text(), file_name, {"dp=0.01", "dp=0.002", "time.cfl=~", "time.dt_max=~", "time.dt=1e-4"});
+  EXPECT_DOUBLE_EQ(d.dp, 0.002);
+  EXPECT_FALSE(d.time.cfl);
+  EXPECT_DOUBLE_EQ(*d.time.dt, 1e-4);
+  // A whole new section.
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name, {"solid.dt=1e-6"}).solid.dt.value(), 1e-6);
+}
+
+TEST(CaseFileOverrides, BadValueNamesTheOverride) {
+  const std::string msg = error_of(valid_text(), {"time.end=-1"});
+  EXPECT_EQ(msg, file_name + " (--set time.end=-1): time.end = -1: expected a positive number [s]");
+  EXPECT_THAT(error_of(valid_text(), {"bodies.plate.velocity=[1,2,3]"}),
+              HasSubstr("(--set bodies.plate.velocity=[1,2,3]): bodies[1].velocity = [1, 2, 3]: expected an initial velocity"));
+  // An override that moves a body into another: the line of the body plus the override.
+  const std::string overlap = error_of(valid_text(), {"bodies.plate.rectangle.min=[0.1, 0.02]"});
+  EXPECT_THAT(overlap, StartsWith(file_name + ":" + std::to_string(line_of(valid_text(), "min: [0.4, 0.02]")) +
+                                  " (after --set bodies.plate.rectangle.min=[0.1, 0.02])"));
+  EXPECT_THAT(overlap, HasSubstr("bodies[1].rectangle overlaps bodies[0].rectangle"));
+}
+
+TEST(CaseFileOverrides, TypoKeyMentionsTheOverride) {
+  const std::string msg = error_of(valid_text(), {"time.ned=0.5"});
+  EXPECT_THAT(msg, StartsWith(file_name + " (--set time.ned=0.5): unknown key 'ned' in time; expected one of: end, dt, cfl, dt_max"));
+  const std::string msg2 = error_of(valid_text(), {"tmie.end=0.5"});
+  EXPECT_THAT(msg2, StartsWith(file_name + " (--set tmie.end=0.5): unknown key 'tmie' in (top level)"));
+  EXPECT_THAT(msg2, HasSubstr("did you mean 'time'?"));
+}
+
+TEST(CaseFileOverrides, BadPaths) {
+  EXPECT_EQ(error_of(valid_text(), {"bodies.5.velocity=[0,0]"}),
+            file_name + " (--set bodies.5.velocity=[0,0]): index 5 is out of range: bodies has 2 element(s)");
+  EXPECT_THAT(error_of(valid_text(), {"bodies.gate.velocity=[0,0]"}),
+              HasSubstr("(--set bodies.gate.velocity=[0,0]): bodies has no element named 'gate'; expected an index (0 to 1) "
+                        "or one of the names: column, plate"));
+  EXPECT_THAT(error_of(valid_text(), {"dp.x=1"}),
+              HasSubstr("(--set dp.x=1): dp is a single value (0.004), so it has no key 'x'"));
+  EXPECT_THAT(error_of(valid_text(), {"time.end"}), HasSubstr("(--set time.end): expected dotted.key=value"));
+  EXPECT_THAT(error_of(valid_text(), {"time..end=1"}), HasSubstr("'time..end' is not a dotted key"));
+  EXPECT_THAT(error_of(valid_text(), {"gravity=[0,"}), HasSubstr("(--set gravity=[0,): the value '[0,' is not valid YAML"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fuzz: mutated copies of the valid case either parse or throw CaseError; nothing else, no crash.
+
+namespace {
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::string join_lines(const std::vector<std::string>& lines) {
+  std::string text;
+  for (const auto& l : lines) text += l + "\n";
+  return text;
+}
+
+std::string mutate(const std::string& text, std::mt19937& rng) {
+  static const std::vector<std::string> garbage = {"-1", "abc", "[1,2,3]", "{}", "\"\"", "1e400", "nan", "0", "~",
+                                                   "[", "}", ":", "- x", "&a", "*a", "!!int x", "0x10", "-0", ".inf"};
+  const auto pick = [&](const std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  std::vector<std::string> lines = split_lines(text);
+  if (lines.empty()) return text;
+  switch (pick(8)) {
+    case 0:  // delete a line
+      lines.erase(lines.begin() + static_cast<std::ptrdiff_t>(pick(lines.size())));
+      break;
+    case 1: {  // duplicate a line
+      const auto i = pick(lines.size());
+      lines.insert(lines.begin() + static_cast<std::ptrdiff_t>(i), lines[i]);
+      break;
+    }
+    case 2:  // swap two lines
+      std::swap(lines[pick(lines.size())], lines[pick(lines.size())]);
+      break;
+    case 3: {  // replace a token (a run of letters, digits, '.', '-', '_') by garbage
+      std::string& line = lines[pick(lines.size())];
+      std::vector<std::pair<std::size_t, std::size_t>> tokens;
+      for (std::size_t i = 0; i < line.size();) {
+        const auto is_token = [](const char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_'; };
+        if (!is_token(line[i])) {
+          ++i;
+          continue;
+        }
+        std::size_t j = i;
+        while (j < line.size() && is_token(line[j])) ++j;
+        tokens.emplace_back(i, j - i);
+        i = j;
+      }
+      if (!tokens.empty()) {
+        const auto [pos, len] = tokens[pick(tokens.size())];
+        line.replace(pos, len, garbage[pick(garbage.size())]);
+      }
+      break;
+    }
+    case 4: {  // truncate at a random byte
+      const std::string joined = join_lines(lines);
+      return joined.substr(0, pick(joined.size() + 1));
+    }
+    case 5: {  // insert random characters, tabs included
+      static const std::string chars = "\t :-[]{},#&*!|>'\"%@`?\\x9.";
+      std::string& line = lines[pick(lines.size())];
+      const auto n = 1 + pick(3);
+      for (std::size_t k = 0; k < n; ++k) line.insert(pick(line.size() + 1), 1, chars[pick(chars.size())]);
+      break;
+    }
+    case 6: {  // change the indentation of a line
+      std::string& line = lines[pick(lines.size())];
+      const auto indent = line.find_first_not_of(' ');
+      line = std::string(pick(7), ' ') + (indent == std::string::npos ? std::string() : line.substr(indent));
+      break;
+    }
+    default: {  // replace a number by another number, sometimes out of range
+      std::string& line = lines[pick(lines.size())];
+      const auto pos = line.find_first_of("0123456789");
+      if (pos != std::string::npos) {
+        static const std::vector<std::string> numbers = {"0", "-0.5", "1e-30", "1e30", "2", "0.3", "100000"};
+        line.replace(pos, 1, numbers[pick(numbers.size())]);
+      }
+      break;
+    }
+  }
+  return join_lines(lines);
+}
+
+}  // namespace
+
+TEST(CaseFileFuzz, MutatedFilesParseOrThrowCaseError) {
+  std::mt19937 rng(20240611);
+  const bool verbose = std::getenv("MPSFSI_FUZZ_VERBOSE") != nullptr;  // print every message
+  int accepted = 0;
+  int rejected = 0;
+  for (int iteration = 0; iteration < 200; ++iteration) {
+    std::string text = valid_text();
+    const int n_mutations = 1 + static_cast<int>(rng() % 3);
+    for (int m = 0; m < n_mutations; ++m) text = mutate(text, rng);
+    try {
+      const CaseSpec c = parse_case(text, "fuzz.yaml");
+      ++accepted;
+      // Whatever is accepted is consistent.
+      EXPECT_GT(c.dp, 0);
+      EXPECT_FALSE(c.bodies.empty());
+      for (const auto& b : c.bodies) EXPECT_TRUE((b.rect.hi.array() > b.rect.lo.array()).all());
+      EXPECT_TRUE(c.time.dt.has_value() != c.time.cfl.has_value());
+    } catch (const CaseError& e) {
+      ++rejected;
+      if (verbose) std::printf("  %s\n", e.what());
+      EXPECT_THAT(e.what(), StartsWith("fuzz.yaml")) << "mutated case:\n" << text;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "not a CaseError: " << e.what() << "\nmutated case:\n" << text;
+    } catch (...) {
+      ADD_FAILURE() << "unknown exception\nmutated case:\n" << text;
+    }
+  }
+  std::printf("fuzz: %d mutated cases accepted, %d rejected with CaseError\n", accepted, rejected);
+  EXPECT_GT(accepted, 0);
+  EXPECT_GT(rejected, 0);
+}

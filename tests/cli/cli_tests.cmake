@@ -1,5 +1,29 @@
-# Command-line tests of the mpsfsi program (label unit).
-foreach(case_name dam_break hydrostatic dam_break_obstacle)
+# Command-line tests of the mpsfsi program (label unit): every shipped case passes `mpsfsi check`;
+# each kind of bad input gives a message naming file, line, key and expected form, and exit code 2.
+set(MPSFSI_SHIPPED_CASES dam_break hydrostatic dam_break_obstacle)
+foreach(case_name IN LISTS MPSFSI_SHIPPED_CASES)
   add_test(NAME check_${case_name} COMMAND mpsfsi check ${PROJECT_SOURCE_DIR}/cases/${case_name}.yaml)
-  set_tests_properties(check_${case_name} PROPERTIES LABELS unit)
+  set_tests_properties(check_${case_name} PROPERTIES LABELS unit PASS_REGULAR_EXPRESSION "case OK")
 endforeach()
+
+function(mpsfsi_cli_test name code regex)
+  list(JOIN ARGN "|" cmd)
+  add_test(NAME cli_${name}
+           COMMAND ${CMAKE_COMMAND} "-DCMD=$<TARGET_FILE:mpsfsi>|${cmd}" "-DCODE=${code}" "-DREGEX=${regex}"
+                   -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
+  set_tests_properties(cli_${name} PROPERTIES LABELS unit)
+endfunction()
+
+set(bad ${CMAKE_CURRENT_SOURCE_DIR}/cli/bad)
+mpsfsi_cli_test(nonpositive_dp 2 "nonpositive_dp.yaml:[0-9]+: dp = -0.004: expected a positive number" check ${bad}/nonpositive_dp.yaml)
+mpsfsi_cli_test(unknown_key 2 "unknown_key.yaml:[0-9]+: unknown key 'tme'.*expected" check ${bad}/unknown_key.yaml)
+mpsfsi_cli_test(missing_key 2 "missing_key.yaml:[0-9]+: missing key 'end' in time; expected" check ${bad}/missing_key.yaml)
+mpsfsi_cli_test(wrong_type 2 "wrong_type.yaml:[0-9]+: gravity = down: expected a vector" check ${bad}/wrong_type.yaml)
+mpsfsi_cli_test(overlapping_bodies 2 "overlapping_bodies.yaml:[0-9]+: bodies\\[1\\].rectangle overlaps bodies\\[0\\]" check ${bad}/overlapping_bodies.yaml)
+mpsfsi_cli_test(set_bad_value 2 "--set dp=0.*expected a positive number" check ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml --set dp=0)
+mpsfsi_cli_test(set_unknown_key 2 "unknown key 'nosuch'" check ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml --set nosuch=1)
+mpsfsi_cli_test(dp_not_a_number 2 "--dp" run ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml --dp abc)
+mpsfsi_cli_test(missing_case_file 2 "nonexistent.yaml" check nonexistent.yaml)
+mpsfsi_cli_test(no_subcommand 2 "subcommand")
+mpsfsi_cli_test(help 0 "run.*check" --help)
+mpsfsi_cli_test(version 0 "mpsfsi [0-9]+\\.[0-9]+\\.[0-9]+" --version)

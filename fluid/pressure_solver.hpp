@@ -1,0 +1,68 @@
+// The distributed linear solve of the pressure Poisson equation (seed 004 eq. 23) behind a small
+// interface without Trilinos types. Every rank holds all particles; the rows of the matrix are split
+// into contiguous blocks, one per rank, each rank assembles its block as CRS arrays with global column
+// ids, and the solution comes back on every rank. The only implementation
+// (fluid/pressure_solver_trilinos.cpp) uses Tpetra + Belos with MueLu or Ifpack2.
+#pragma once
+
+#include "core/types.hpp"
+
+#include <mpi.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mpsfsi {
+
+struct PressureSolverSettings {
+  std::string solver = "cg";              ///< cg | gmres
+  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | none
+  Real tolerance = 1e-8;                  ///< relative residual ||b - Ax|| / ||b||
+  int max_iterations = 500;
+  int muelu_rebuild_every = 10;           ///< MueLu: full hierarchy setup every N solves, reuse between
+};
+
+/// The rows [begin, end) of a system with n_rows rows that this rank owns.
+struct RowRange {
+  std::size_t begin = 0;
+  std::size_t end = 0;
+  std::size_t size() const { return end - begin; }
+};
+
+/// This rank's rows of the system, in CRS form with global column ids sorted within each row.
+struct LocalRows {
+  std::size_t n_global_rows = 0;
+  RowRange rows;
+  std::vector<std::size_t> row_ptr;   ///< size rows.size() + 1
+  std::vector<GlobalId> col;          ///< global column (row) ids
+  std::vector<Real> value;
+  std::vector<Real> rhs;              ///< size rows.size()
+};
+
+struct PressureSolveResult {
+  int iterations = 0;
+  Real residual = 0;          ///< true relative residual ||b - Ax|| / ||b|| (0 if b = 0)
+  bool converged = true;
+  double t_matrix = 0;        ///< building the distributed matrix [s]
+  double t_setup = 0;         ///< preconditioner setup [s]
+  double t_solve = 0;         ///< Krylov solve, residual check and gather [s]
+};
+
+class PressureSolver {
+ public:
+  virtual ~PressureSolver() = default;
+  /// The rows this rank assembles for a system of n_rows rows (the same split on every call).
+  virtual RowRange owned_rows(std::size_t n_rows) const = 0;
+  /// Solve A x = b. `x` has n_global_rows entries on every rank: in, the initial guess; out, the
+  /// solution (identical on every rank). Collective over the communicator.
+  virtual PressureSolveResult solve(const LocalRows& system, std::vector<Real>& x) = 0;
+  /// Bytes held by the matrix and the preconditioner on this rank (estimate).
+  virtual std::size_t memory_bytes() const = 0;
+};
+
+/// Throws std::invalid_argument naming the bad setting.
+std::unique_ptr<PressureSolver> make_pressure_solver(const PressureSolverSettings& settings, MPI_Comm comm);
+
+}  // namespace mpsfsi

@@ -1,0 +1,307 @@
+// Trilinos implementation of the pressure solve (seed 004 eq. 23): the only translation unit that
+// includes Tpetra, Belos, MueLu and Ifpack2. The rank's block of rows is turned into a Tpetra::CrsMatrix
+// straight from local CRS arrays (Kokkos views + expertStaticFillComplete, no insertGlobalValues); Belos
+// CG or GMRES with MueLu (coarse solver RELAXATION: the default KLU2 coarse solve is wrong on 2 ranks in
+// this build, see shared/notes/trilinos-on-debian.md; hierarchy reused between full setups) or Ifpack2
+// Chebyshev / ILU(0) (additive Schwarz) / Jacobi; the true residual is checked after every solve and
+// the solution is gathered to every rank.
+#include "fluid/pressure_solver.hpp"
+
+#include <BelosLinearProblem.hpp>
+#include <BelosSolverFactory.hpp>
+#include <BelosTpetraAdapter.hpp>
+#include <Ifpack2_Factory.hpp>
+#include <Kokkos_Core.hpp>
+#include <MueLu_CreateTpetraPreconditioner.hpp>
+#include <Teuchos_DefaultMpiComm.hpp>
+#include <Teuchos_ParameterList.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Map.hpp>
+#include <Tpetra_MultiVector.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace mpsfsi {
+
+namespace {
+
+using Scalar = double;
+using Map = Tpetra::Map<>;
+using Matrix = Tpetra::CrsMatrix<Scalar>;
+using MV = Tpetra::MultiVector<Scalar>;
+using OP = Tpetra::Operator<Scalar>;
+using LO = Map::local_ordinal_type;
+using GO = Map::global_ordinal_type;
+using Node = Map::node_type;
+using Teuchos::RCP;
+using Teuchos::rcp;
+
+static_assert(std::is_same<GO, GlobalId>::value, "GlobalId must match Tpetra's GlobalOrdinal");
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Kokkos must be up before the first Tpetra object. MPI belongs to main(); Kokkos (Serial only in this
+/// build) is finalized at exit only if we started it, after every solver object is gone.
+void ensure_kokkos() {
+  if (Kokkos::is_initialized()) return;
+  Kokkos::initialize();
+  std::atexit([] {
+    if (Kokkos::is_initialized()) Kokkos::finalize();
+  });
+}
+
+class TrilinosPressureSolver final : public PressureSolver {
+ public:
+  TrilinosPressureSolver(const PressureSolverSettings& s, MPI_Comm comm) : settings_(s) {
+    ensure_kokkos();
+    comm_ = rcp(new Teuchos::MpiComm<int>(comm));
+    MPI_Comm_dup(comm, &raw_comm_);
+    n_ranks_ = comm_->getSize();
+    rank_ = comm_->getRank();
+    static const char* solvers[] = {"cg", "gmres"};
+    static const char* precs[] = {"muelu", "chebyshev", "ilu", "jacobi", "none"};
+    if (std::find(std::begin(solvers), std::end(solvers), s.solver) == std::end(solvers))
+      throw std::invalid_argument("fluid.solver: unknown solver '" + s.solver + "' (expected cg or gmres)");
+    if (std::find(std::begin(precs), std::end(precs), s.preconditioner) == std::end(precs))
+      throw std::invalid_argument("fluid.preconditioner: unknown preconditioner '" + s.preconditioner +
+                                  "' (expected muelu, chebyshev, ilu, jacobi or none)");
+    auto params = rcp(new Teuchos::ParameterList);
+    params->set("Convergence Tolerance", s.tolerance);
+    params->set("Maximum Iterations", s.max_iterations);
+    params->set("Implicit Residual Scaling", std::string("Norm of RHS"));
+    if (s.solver == "gmres") params->set("Explicit Residual Scaling", std::string("Norm of RHS"));
+    params->set("Verbosity", 0);
+    Belos::SolverFactory<Scalar, MV, OP> factory;
+    belos_ = factory.create(s.solver == "cg" ? "PSEUDOBLOCK CG" : "PSEUDOBLOCK GMRES", params);
+  }
+
+  ~TrilinosPressureSolver() override {
+    // Release every Tpetra object before the communicator goes.
+    belos_ = Teuchos::null;
+    muelu_ = Teuchos::null;
+    ifpack_ = Teuchos::null;
+    A_ = Teuchos::null;
+    x_ = b_ = r_ = Teuchos::null;
+    row_map_ = Teuchos::null;
+    comm_ = Teuchos::null;
+    MPI_Comm_free(&raw_comm_);
+  }
+
+  RowRange owned_rows(const std::size_t n) const override {
+    const std::size_t size = static_cast<std::size_t>(n_ranks_), r = static_cast<std::size_t>(rank_);
+    const std::size_t base = n / size, rem = n % size;
+    RowRange range;
+    range.begin = r * base + std::min(r, rem);
+    range.end = range.begin + base + (r < rem ? 1 : 0);
+    return range;
+  }
+
+  std::size_t memory_bytes() const override {
+    std::size_t bytes = 0;
+    if (!A_.is_null()) bytes += A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO)) + (A_->getNodeNumRows() + 1) * sizeof(std::size_t);
+    if (!x_.is_null()) bytes += 3 * x_->getLocalLength() * sizeof(Scalar);
+    bytes += precond_bytes_;
+    return bytes;
+  }
+
+  PressureSolveResult solve(const LocalRows& sys, std::vector<Real>& x) override {
+    PressureSolveResult result;
+    auto t0 = Clock::now();
+    build_matrix(sys);
+    // Right-hand side and warm start.
+    {
+      auto b = b_->getLocalViewHost(Tpetra::Access::OverwriteAll);
+      auto xv = x_->getLocalViewHost(Tpetra::Access::OverwriteAll);
+      for (std::size_t k = 0; k < sys.rows.size(); ++k) {
+        b(k, 0) = sys.rhs[k];
+        xv(k, 0) = x[sys.rows.begin + k];
+      }
+    }
+    result.t_matrix = seconds_since(t0);
+
+    t0 = Clock::now();
+    Teuchos::Array<Scalar> bnorm(1);
+    b_->norm2(bnorm());
+    if (bnorm[0] == 0) {  // A x = 0 with A SPD: x = 0
+      std::fill(x.begin(), x.end(), 0.0);
+      result.t_solve = seconds_since(t0);
+      return result;
+    }
+    RCP<OP> prec = setup_preconditioner();
+    result.t_setup = seconds_since(t0);
+
+    t0 = Clock::now();
+    auto problem = rcp(new Belos::LinearProblem<Scalar, MV, OP>(A_, x_, b_));
+    if (!prec.is_null()) {
+      if (settings_.solver == "cg")
+        problem->setLeftPrec(prec);
+      else
+        problem->setRightPrec(prec);
+    }
+    problem->setProblem();
+    belos_->setProblem(problem);
+    const Belos::ReturnType ret = belos_->solve();
+    result.iterations = belos_->getNumIters();
+    // True residual.
+    A_->apply(*x_, *r_);
+    r_->update(1.0, *b_, -1.0);
+    Teuchos::Array<Scalar> rnorm(1);
+    r_->norm2(rnorm());
+    result.residual = rnorm[0] / bnorm[0];
+    result.converged = ret == Belos::Converged && std::isfinite(result.residual) &&
+                       result.residual <= 10 * settings_.tolerance;
+    gather(sys, x);
+    result.t_solve = seconds_since(t0);
+    ++n_solves_;
+    return result;
+  }
+
+ private:
+  void build_matrix(const LocalRows& sys) {
+    const std::size_t n_own = sys.rows.size();
+    if (row_map_.is_null() || row_map_->getGlobalNumElements() != sys.n_global_rows) {
+      row_map_ = rcp(new Map(static_cast<Tpetra::global_size_t>(sys.n_global_rows), n_own, 0, comm_));
+      x_ = rcp(new MV(row_map_, 1));
+      b_ = rcp(new MV(row_map_, 1));
+      r_ = rcp(new MV(row_map_, 1));
+      muelu_ = Teuchos::null;  // the hierarchy belongs to the old map
+      ifpack_ = Teuchos::null;
+      local_of_global_.assign(sys.n_global_rows, -1);
+    }
+    // Column map: the sorted set of global ids referenced by this rank's rows (sorted, so each row's
+    // local column ids stay sorted). On one rank it is the row map.
+    RCP<const Map> col_map = row_map_;
+    const std::size_t nnz = sys.col.size();
+    if (n_ranks_ > 1) {
+      col_gids_.clear();
+      for (const GO g : sys.col)
+        if (local_of_global_[static_cast<std::size_t>(g)] < 0) {
+          local_of_global_[static_cast<std::size_t>(g)] = 0;
+          col_gids_.push_back(g);
+        }
+      std::sort(col_gids_.begin(), col_gids_.end());
+      for (std::size_t k = 0; k < col_gids_.size(); ++k)
+        local_of_global_[static_cast<std::size_t>(col_gids_[k])] = static_cast<LO>(k);
+      col_map = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                            Teuchos::ArrayView<const GO>(col_gids_.data(), static_cast<int>(col_gids_.size())), 0,
+                            comm_));
+    }
+    using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
+    using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
+    using Values = Matrix::local_matrix_device_type::values_type;
+    RowPtr ptr(Kokkos::ViewAllocateWithoutInitializing("ptr"), n_own + 1);
+    Entries ind(Kokkos::ViewAllocateWithoutInitializing("ind"), nnz);
+    Values val(Kokkos::ViewAllocateWithoutInitializing("val"), nnz);
+    for (std::size_t k = 0; k <= n_own; ++k) ptr(k) = sys.row_ptr[k];
+    if (n_ranks_ > 1) {
+      for (std::size_t k = 0; k < nnz; ++k) ind(k) = local_of_global_[static_cast<std::size_t>(sys.col[k])];
+      for (const GO g : col_gids_) local_of_global_[static_cast<std::size_t>(g)] = -1;
+    } else {
+      for (std::size_t k = 0; k < nnz; ++k) ind(k) = static_cast<LO>(sys.col[k]);
+    }
+    for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
+    A_ = rcp(new Matrix(row_map_, col_map, ptr, ind, val));
+    A_->expertStaticFillComplete(row_map_, row_map_);
+  }
+
+  RCP<OP> setup_preconditioner() {
+    const std::string& p = settings_.preconditioner;
+    if (p == "none") return Teuchos::null;
+    if (p == "muelu") {
+      const bool rebuild = muelu_.is_null() || settings_.muelu_rebuild_every <= 1 ||
+                           n_solves_ % static_cast<std::size_t>(settings_.muelu_rebuild_every) == 0;
+      if (rebuild) {
+        Teuchos::ParameterList params;
+        params.set("verbosity", std::string("none"));
+        params.set("multigrid algorithm", std::string("sa"));
+        params.set("coarse: type", std::string("RELAXATION"));
+        params.set("coarse: max size", 64);
+        params.set("smoother: type", std::string("CHEBYSHEV"));
+        params.set("reuse: type", std::string("RP"));
+        RCP<OP> A_op = A_;
+        muelu_ = MueLu::CreateTpetraPreconditioner(A_op, params);
+      } else {
+        MueLu::ReuseTpetraPreconditioner(A_, *muelu_);
+      }
+      precond_bytes_ = 2 * A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO));  // rough: P, R, coarse A
+      return muelu_;
+    }
+    Teuchos::ParameterList params;
+    std::string type;
+    if (p == "jacobi") {
+      type = "RELAXATION";
+      params.set("relaxation: type", std::string("Jacobi"));
+      params.set("relaxation: sweeps", 1);
+    } else if (p == "chebyshev") {
+      type = "CHEBYSHEV";
+      params.set("chebyshev: degree", 3);
+    } else {  // ilu: ILU(0) on each rank's block (additive Schwarz, no overlap)
+      type = "SCHWARZ";
+      params.set("schwarz: overlap level", 0);
+      params.set("schwarz: use reordering", false);
+      params.set("inner preconditioner name", std::string("RILUK"));
+      Teuchos::ParameterList inner;
+      inner.set("fact: iluk level-of-fill", 0);
+      params.set("inner preconditioner parameters", inner);
+    }
+    Ifpack2::Factory factory;
+    ifpack_ = factory.create<Tpetra::RowMatrix<Scalar>>(type, A_);
+    ifpack_->setParameters(params);
+    ifpack_->initialize();
+    ifpack_->compute();
+    precond_bytes_ = p == "ilu" ? A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO)) : 2 * x_->getLocalLength() * sizeof(Scalar);
+    return ifpack_;
+  }
+
+  void gather(const LocalRows& sys, std::vector<Real>& x) {
+    auto xv = x_->getLocalViewHost(Tpetra::Access::ReadOnly);
+    const std::size_t n_own = sys.rows.size();
+    if (n_ranks_ == 1) {
+      for (std::size_t k = 0; k < n_own; ++k) x[k] = xv(k, 0);
+      return;
+    }
+    counts_.resize(static_cast<std::size_t>(n_ranks_));
+    displs_.resize(static_cast<std::size_t>(n_ranks_));
+    for (int r = 0; r < n_ranks_; ++r) {
+      // owned_rows() of rank r
+      const std::size_t size = static_cast<std::size_t>(n_ranks_), rr = static_cast<std::size_t>(r);
+      const std::size_t n = sys.n_global_rows, base = n / size, rem = n % size;
+      displs_[rr] = static_cast<int>(rr * base + std::min(rr, rem));
+      counts_[rr] = static_cast<int>(base + (rr < rem ? 1 : 0));
+    }
+    send_.resize(n_own);
+    for (std::size_t k = 0; k < n_own; ++k) send_[k] = xv(k, 0);
+    MPI_Allgatherv(send_.data(), static_cast<int>(n_own), MPI_DOUBLE, x.data(), counts_.data(), displs_.data(),
+                   MPI_DOUBLE, raw_comm_);
+  }
+
+  PressureSolverSettings settings_;
+  RCP<const Teuchos::Comm<int>> comm_;
+  MPI_Comm raw_comm_ = MPI_COMM_NULL;
+  int n_ranks_ = 1, rank_ = 0;
+  RCP<const Map> row_map_;
+  RCP<Matrix> A_;
+  RCP<MV> x_, b_, r_;
+  RCP<Belos::SolverManager<Scalar, MV, OP>> belos_;
+  RCP<MueLu::TpetraOperator<Scalar, LO, GO, Node>> muelu_;
+  RCP<Ifpack2::Preconditioner<Scalar, LO, GO, Node>> ifpack_;
+  std::size_t n_solves_ = 0;
+  std::size_t precond_bytes_ = 0;
+  std::vector<LO> local_of_global_;
+  std::vector<GO> col_gids_;
+  std::vector<int> counts_, displs_;
+  std::vector<Real> send_;
+};
+
+}  // namespace
+
+std::unique_ptr<PressureSolver> make_pressure_solver(const PressureSolverSettings& settings, MPI_Comm comm) {
+  return std::make_unique<TrilinosPressureSolver>(settings, comm);
+}
+
+}  // namespace mpsfsi

@@ -1,0 +1,12 @@
+# Runs a command and checks its exit code and that its output matches a regular expression.
+# cmake -DCMD="prog|arg1|arg2" -DCODE=2 -DREGEX="..." -P expect.cmake   ('|' separates arguments)
+string(REPLACE "|" ";" cmd "${CMD}")
+execute_process(COMMAND ${cmd} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+set(all "${out}${err}")
+if(NOT "${code}" STREQUAL "${CODE}")
+  message(FATAL_ERROR "exit code ${code}, expected ${CODE}; output:\n${all}")
+endif()
+if(NOT "${all}" MATCHES "${REGEX}")
+  message(FATAL_ERROR "output does not match '${REGEX}':\n${all}")
+endif()
+message(STATUS "exit ${code} as expected; output:\n${all}")
