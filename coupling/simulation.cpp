@@ -52,6 +52,7 @@ RunSummary run_case(const CaseSpec& spec, Scene scene, const RunSettings& settin
   std::unique_ptr<SolidSolver> solid;
   if (has_fluid) fluid = std::make_unique<FluidSolver>(spec, p, comm);
   if (has_solid) solid = std::make_unique<SolidSolver>(spec, p);
+  if (solid && rank == 0) solid->set_output_directory(settings.output_dir);  // fragments.csv
 
   RunSummary summary;
   VtkSeriesWriter writer(settings.output_dir, "particles");

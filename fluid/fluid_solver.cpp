@@ -1,15 +1,558 @@
-// Semi-implicit MPS fluid step (seed 004 eq. 16-24). (Stub until the fluid issue lands.)
+// Semi-implicit MPS fluid step (seed 004 §4.1, §4.3, §4.6): weight and number density (eq. 7-8),
+// Laplacian (eq. 12-13) for the viscosity and the PPE, explicit prediction (eq. 16-17), collision model,
+// number density n* (eq. 18), free surface by the double check (§4.3), the PPE with weak compressibility
+// and relaxation (eq. 22-23; the alpha term enters the matrix as 1/(c^2 dt^2), see
+// shared/notes/mps-practice.md), the correction (eq. 19, 24) with the minimum-pressure gradient (eq. 9 with
+// p_min) or the corrected gradient (eq. 14-15), and the time-step control (eq. 52 plus the viscous limit).
+// Every rank holds all particles and does the same explicit work; only the PPE rows are distributed.
 #include "fluid/fluid_solver.hpp"
 
+#include "core/kernel.hpp"
+#include "core/neighbours.hpp"
+#include "fluid/pressure_solver.hpp"
+
+#include <Eigen/LU>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace mpsfsi {
 
-struct FluidSolver::Impl {};
+namespace {
 
-FluidSolver::FluidSolver(const CaseSpec&, ParticleSet&, MPI_Comm) : impl_(std::make_unique<Impl>()) {}
+using Clock = std::chrono::steady_clock;
+double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// What a particle does in the fluid computation.
+enum class Role : std::uint8_t {
+  fluid,     ///< moves with the fluid equations, PPE row
+  boundary,  ///< prescribed position and velocity, PPE row (wall particles; solids when coupled)
+  dummy,     ///< counts in the number density only
+  none       ///< ignored (solids when not coupled)
+};
+
+inline bool has_row(const Role r) { return r == Role::fluid || r == Role::boundary; }
+
+/// Angle [rad] and angular velocity [rad/s] of a prescribed tank motion.
+class TankMotion {
+ public:
+  explicit TankMotion(const TankMotionSpec& spec) : spec_(spec) {
+    if (spec.type != TankMotionType::table) return;
+    std::ifstream in(spec.file);
+    if (!in) throw std::runtime_error("tank_motion: cannot read " + spec.file);
+    std::string line;
+    while (std::getline(in, line)) {
+      std::replace(line.begin(), line.end(), ',', ' ');
+      std::istringstream ls(line);
+      Real t = 0, deg = 0;
+      if (ls >> t >> deg) {
+        time_.push_back(t);
+        angle_.push_back(deg * M_PI / 180.0);
+      }
+    }
+    if (time_.size() < 2) throw std::runtime_error("tank_motion: " + spec.file + " needs at least two rows of time, angle");
+  }
+  bool moving() const { return spec_.type != TankMotionType::none; }
+  const Vec& pivot() const { return spec_.pivot; }
+  /// Angle and angular velocity at time t.
+  std::pair<Real, Real> at(const Real t) const {
+    if (spec_.type == TankMotionType::sine_roll) {
+      const Real w = 2 * M_PI / spec_.period;
+      return {spec_.amplitude * std::sin(w * t), spec_.amplitude * w * std::cos(w * t)};
+    }
+    if (spec_.type == TankMotionType::table) {
+      if (t <= time_.front()) return {angle_.front(), 0.0};
+      if (t >= time_.back()) return {angle_.back(), 0.0};
+      const auto k = static_cast<std::size_t>(std::upper_bound(time_.begin(), time_.end(), t) - time_.begin()) - 1;
+      const Real s = (t - time_[k]) / (time_[k + 1] - time_[k]);
+      const Real omega = (angle_[k + 1] - angle_[k]) / (time_[k + 1] - time_[k]);
+      return {angle_[k] + s * (angle_[k + 1] - angle_[k]), omega};
+    }
+    return {0.0, 0.0};
+  }
+
+ private:
+  TankMotionSpec spec_;
+  std::vector<Real> time_, angle_;
+};
+
+}  // namespace
+
+struct FluidSolver::Impl {
+  Impl(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
+      : p(particles), opt(options), motion(spec.tank_motion) {
+    MPI_Comm_rank(comm, &rank);
+    dp = spec.dp;
+    re_g = spec.fluid.re_gradient * dp;
+    re_l = spec.fluid.re_laplacian * dp;
+    r_max = std::max(re_g, re_l);
+    lat_g = lattice_constants(dp, re_g);
+    lat_l = lattice_constants(dp, re_l);
+    beta1 = spec.fluid.beta1;
+    beta2 = spec.fluid.beta2;
+    corrected = spec.fluid.gradient == "corrected";
+    if (!corrected && spec.fluid.gradient != "min_pressure")
+      throw std::invalid_argument("fluid.gradient: unknown gradient '" + spec.fluid.gradient +
+                                  "' (expected min_pressure or corrected)");
+    gravity = spec.gravity;
+    time = spec.time;
+    // One fluid material: the PPE is written for one density.
+    int material = -1;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.kind[i] != ParticleKind::fluid) continue;
+      if (material < 0) material = p.material[i];
+      if (p.material[i] != material)
+        throw std::invalid_argument("the fluid solver supports one fluid material per case");
+    }
+    if (material < 0 || material >= static_cast<int>(spec.fluid_materials.size()))
+      throw std::invalid_argument("the fluid solver needs fluid particles with a fluid material");
+    const FluidMaterial& m = spec.fluid_materials[static_cast<std::size_t>(material)];
+    rho = m.rho;
+    nu = m.nu;
+    c = m.c;
+    kappa = m.kappa;
+
+    PressureSolverSettings ps;
+    ps.solver = spec.fluid.solver;
+    ps.preconditioner = spec.fluid.preconditioner;
+    ps.tolerance = spec.fluid.tolerance;
+    ps.max_iterations = spec.fluid.max_iterations;
+    ps.muelu_rebuild_every = opt.muelu_rebuild_every;
+    solver = make_pressure_solver(ps, comm);
+    tolerance = ps.tolerance;
+    preconditioner = ps.preconditioner;
+
+    p.add_scalar_field("pressure", 0.0);
+    p.add_scalar_field("free_surface", 0.0);
+    if (motion.moving())
+      for (std::size_t i = 0; i < p.size(); ++i)
+        if (p.kind[i] == ParticleKind::wall || p.kind[i] == ParticleKind::dummy) wall_reference[p.global_id[i]] = p.position[i];
+  }
+
+  Role role(const ParticleKind k) const {
+    switch (k) {
+      case ParticleKind::fluid: return Role::fluid;
+      case ParticleKind::wall: return Role::boundary;
+      case ParticleKind::dummy: return Role::dummy;
+      case ParticleKind::solid: return opt.solid_as_boundary ? Role::boundary : Role::none;
+    }
+    return Role::none;
+  }
+
+  // ---- phases of a step, one loop over a neighbour list each ----
+
+  void classify() {
+    const std::size_t n = p.size();
+    roles.resize(n);
+    for (std::size_t i = 0; i < n; ++i) roles[i] = role(p.kind[i]);
+  }
+
+  /// Walls and their dummy layers follow the tank motion: rotation about the pivot, v = omega x r.
+  void move_walls(const Real t) {
+    if (!motion.moving()) return;
+    const auto [theta, omega] = motion.at(t);
+    Mat rot;
+    rot << std::cos(theta), -std::sin(theta), std::sin(theta), std::cos(theta);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
+      const auto it = wall_reference.find(p.global_id[i]);
+      if (it == wall_reference.end()) continue;
+      const Vec r = rot * (it->second - motion.pivot());
+      p.position[i] = motion.pivot() + r;
+      p.velocity[i] = omega * Vec(-r[1], r[0]);
+    }
+  }
+
+  /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles.
+  void predict(const Real dt) {
+    const std::size_t n = p.size();
+    const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (roles[i] != Role::fluid) continue;
+      Vec lap = Vec::Zero();
+      if (nu > 0) {
+        const Vec xi = p.position[i], vi = p.velocity[i];
+        for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
+          const auto j = static_cast<std::size_t>(nl.index[k]);
+          if (roles[j] == Role::none) continue;
+          const Real r2 = (p.position[j] - xi).squaredNorm();
+          if (!in_support(r2, re_l)) continue;
+          lap += (p.velocity[j] - vi) * (re_l / std::sqrt(r2) - 1.0);
+        }
+      }
+      p.velocity[i] += dt * (nu * a * lap + gravity);
+      p.position[i] += dt * p.velocity[i];
+    }
+  }
+
+  /// Pairs within re_g at the predicted positions (a filtered copy of the big list).
+  void build_near_list() {
+    const std::size_t n = p.size();
+    near.radius = re_g;
+    near.offset.resize(n + 1);
+    near.index.clear();
+    near.offset[0] = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec xi = p.position[i];
+      if (roles[i] != Role::none)
+        for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
+          const LocalIndex j = nl.index[k];
+          if (roles[static_cast<std::size_t>(j)] == Role::none) continue;
+          if (in_support((p.position[static_cast<std::size_t>(j)] - xi).squaredNorm(), re_g)) near.index.push_back(j);
+        }
+      near.offset[i + 1] = near.index.size();
+    }
+  }
+
+  /// Collision model (MPS-Basic collision()): approaching pairs closer than the collision distance
+  /// exchange momentum along their line with restitution e; boundaries have infinite mass.
+  void collide(const Real dt) {
+    const Real dc2 = std::pow(opt.collision_distance * dp, 2);
+    const std::size_t n = p.size();
+    v_new.resize(n);
+    for (std::size_t i = 0; i < n; ++i) v_new[i] = p.velocity[i];
+    for (std::size_t i = 0; i < n; ++i) {
+      if (roles[i] != Role::fluid) continue;
+      const Vec xi = p.position[i], vi = p.velocity[i];
+      for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+        const auto j = static_cast<std::size_t>(near.index[k]);
+        const Vec rij = p.position[j] - xi;
+        const Real r2 = rij.squaredNorm();
+        if (r2 >= dc2) continue;
+        const Real r = std::sqrt(r2);
+        const Vec e = rij / r;
+        const Real approach = (vi - p.velocity[j]).dot(e);
+        if (approach <= 0) continue;
+        const Real share = roles[j] == Role::fluid ? 0.5 : 1.0;  // equal masses, or a wall
+        v_new[i] -= (1 + opt.restitution) * share * approach * e;
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (roles[i] != Role::fluid) continue;
+      p.position[i] += dt * (v_new[i] - p.velocity[i]);
+      p.velocity[i] = v_new[i];
+    }
+  }
+
+  /// Eq. 8 at the predicted positions: n*, the neighbour count N, and the free-surface double check.
+  void density_and_surface() {
+    const std::size_t n = p.size();
+    n_star.resize(n);
+    auto& surface = p.scalar_field("free_surface");
+    for (std::size_t i = 0; i < n; ++i) {
+      Real ni = 0;
+      int count = 0;
+      if (roles[i] != Role::none) {
+        const Vec xi = p.position[i];
+        for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+          const Real r = (p.position[static_cast<std::size_t>(near.index[k])] - xi).norm();
+          ni += re_g / r - 1.0;
+          ++count;
+        }
+      }
+      n_star[i] = ni;
+      surface[i] = has_row(roles[i]) && ni < beta1 * lat_g.n0 && count < beta2 * lat_g.n_neighbours ? 1.0 : 0.0;
+    }
+  }
+
+  /// Eq. 23 assembled for this rank's rows: -lap P + P / (c^2 dt^2) = kappa rho / dt^2 (n* - n0) / n0, with
+  /// p = 0 rows (free surface) as identity rows dropped from the other rows' columns (keeps symmetry).
+  void assemble(const Real dt) {
+    const std::size_t n = p.size();
+    const auto& surface = p.scalar_field("free_surface");
+    row_of.resize(n);
+    particle_of_row.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      row_of[i] = has_row(roles[i]) ? static_cast<GlobalId>(particle_of_row.size()) : -1;
+      if (row_of[i] >= 0) particle_of_row.push_back(static_cast<LocalIndex>(i));
+    }
+    const std::size_t n_rows = particle_of_row.size();
+    sys.n_global_rows = n_rows;
+    sys.rows = solver->owned_rows(n_rows);
+    sys.row_ptr.resize(sys.rows.size() + 1);
+    sys.rhs.resize(sys.rows.size());
+    sys.col.clear();
+    sys.value.clear();
+    sys.row_ptr[0] = 0;
+    const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
+    const Real compress = 1.0 / (c * c * dt * dt);
+    const Real source = kappa * rho / (dt * dt) / lat_g.n0;
+    const Real dirichlet_diag = a * lat_l.n0 + compress;
+    for (std::size_t r = sys.rows.begin; r < sys.rows.end; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      const std::size_t local = r - sys.rows.begin;
+      if (surface[i] != 0) {
+        sys.col.push_back(static_cast<GlobalId>(r));
+        sys.value.push_back(dirichlet_diag);
+        sys.rhs[local] = 0;
+        sys.row_ptr[local + 1] = sys.col.size();
+        continue;
+      }
+      const Vec xi = p.position[i];
+      Real diag = compress;
+      std::size_t diag_pos = std::numeric_limits<std::size_t>::max();
+      for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
+        const auto j = static_cast<std::size_t>(nl.index[k]);
+        if (!has_row(roles[j])) continue;
+        const Real r2 = (p.position[j] - xi).squaredNorm();
+        if (!in_support(r2, re_l)) continue;
+        const Real coef = a * (re_l / std::sqrt(r2) - 1.0);
+        diag += coef;
+        if (surface[j] != 0) continue;
+        if (diag_pos == std::numeric_limits<std::size_t>::max() && j > i) {
+          diag_pos = sys.col.size();
+          sys.col.push_back(static_cast<GlobalId>(r));
+          sys.value.push_back(0);
+        }
+        sys.col.push_back(row_of[j]);
+        sys.value.push_back(-coef);
+      }
+      if (diag_pos == std::numeric_limits<std::size_t>::max()) {
+        diag_pos = sys.col.size();
+        sys.col.push_back(static_cast<GlobalId>(r));
+        sys.value.push_back(0);
+      }
+      sys.value[diag_pos] = diag;
+      sys.rhs[local] = source * (n_star[i] - lat_g.n0);
+      sys.row_ptr[local + 1] = sys.col.size();
+    }
+  }
+
+  /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient.
+  PressureSolveResult solve_pressure() {
+    auto& pressure = p.scalar_field("pressure");
+    const auto& surface = p.scalar_field("free_surface");
+    const std::size_t n_rows = particle_of_row.size();
+    x_all.resize(n_rows);
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      x_all[r] = surface[i] != 0 ? 0.0 : pressure[i];  // warm start
+    }
+    const PressureSolveResult res = solver->solve(sys, x_all);
+    std::fill(pressure.begin(), pressure.end(), 0.0);
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      pressure[i] = surface[i] != 0 ? 0.0 : std::max(x_all[r], 0.0);
+    }
+    return res;
+  }
+
+  /// Eq. 19 and 24: v += -dt/rho grad P, r += dt (-dt/rho grad P). grad P by eq. 9 with p_min (every pair
+  /// repels), or by the corrected gradient eq. 14-15 (falls back to p_min where the matrix is singular).
+  void correct(const Real dt) {
+    const auto& pressure = p.scalar_field("pressure");
+    const auto& surface = p.scalar_field("free_surface");
+    const std::size_t n = p.size();
+    const Real c_grad = dim / lat_g.n0;
+    dv.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      dv[i].setZero();
+      if (roles[i] != Role::fluid) continue;
+      const Vec xi = p.position[i];
+      const Real pi = pressure[i];
+      Real p_min = pi;
+      for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+        const auto j = static_cast<std::size_t>(near.index[k]);
+        if (has_row(roles[j])) p_min = std::min(p_min, pressure[j]);
+      }
+      Vec g = Vec::Zero();
+      if (corrected && surface[i] == 0) {
+        Mat m = Mat::Zero();
+        Vec b = Vec::Zero();
+        for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+          const auto j = static_cast<std::size_t>(near.index[k]);
+          if (!has_row(roles[j])) continue;
+          const Vec rij = p.position[j] - xi;
+          const Real r = rij.norm();
+          const Real w = re_g / r - 1.0;
+          const Vec e = rij / r;
+          m += w * e * e.transpose();
+          b += w * (pressure[j] - pi) / r * e;
+        }
+        const Real det = m.determinant(), tr = m.trace();
+        if (det > 1e-2 * tr * tr) {
+          dv[i] = -dt / rho * (m.inverse() * b);
+          continue;
+        }
+      }
+      for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+        const auto j = static_cast<std::size_t>(near.index[k]);
+        if (!has_row(roles[j])) continue;
+        const Vec rij = p.position[j] - xi;
+        const Real r2 = rij.squaredNorm();
+        g += (pressure[j] - p_min) / r2 * (re_g / std::sqrt(r2) - 1.0) * rij;
+      }
+      dv[i] = -dt / rho * c_grad * g;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (roles[i] != Role::fluid) continue;
+      p.velocity[i] += dv[i];
+      p.position[i] += dt * dv[i];
+    }
+  }
+
+  /// Fluid particles outside the case's domain are removed.
+  std::size_t remove_escaped() {
+    const std::size_t n = p.size();
+    remove.assign(n, 0);
+    std::size_t n_out = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (p.kind[i] == ParticleKind::fluid && !domain.contains(p.position[i])) {
+        remove[i] = 1;
+        ++n_out;
+      }
+    if (n_out > 0) p.remove_if(remove);
+    return n_out;
+  }
+
+  ParticleSet& p;
+  FluidOptions opt;
+  TankMotion motion;
+  int rank = 0;
+  Real dp = 0, re_g = 0, re_l = 0, r_max = 0;
+  LatticeConstants lat_g, lat_l;
+  Real beta1 = 0, beta2 = 0;
+  bool corrected = false;
+  Vec gravity = Vec::Zero();
+  TimeSpec time;
+  Rect domain;
+  Real rho = 1000, nu = 0, c = 20, kappa = 1;
+  Real tolerance = 1e-8;
+  std::string preconditioner;
+  std::unique_ptr<PressureSolver> solver;
+  std::unordered_map<GlobalId, Vec> wall_reference;
+  std::size_t n_steps = 0;
+
+  // Work arrays, reused between steps.
+  std::vector<Role> roles;
+  NeighbourList nl, near;
+  CellGrid grid;
+  std::vector<Real> n_star;
+  std::vector<Vec> v_new, dv;
+  std::vector<GlobalId> row_of;
+  std::vector<LocalIndex> particle_of_row;
+  LocalRows sys;
+  std::vector<Real> x_all;
+  std::vector<std::uint8_t> remove;
+};
+
+FluidSolver::FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
+    : impl_(std::make_unique<Impl>(spec, particles, comm, options)) {
+  impl_->domain = spec.domain;
+}
+
 FluidSolver::~FluidSolver() = default;
-Real FluidSolver::stable_dt(std::string*) const { throw std::runtime_error("the fluid solver is not implemented yet"); }
-FluidStepReport FluidSolver::advance(Real, Real) { throw std::runtime_error("the fluid solver is not implemented yet"); }
 
+Real FluidSolver::stable_dt(std::string* limit) const {
+  const Impl& m = *impl_;
+  const auto name = [&](const char* s) {
+    if (limit) *limit = s;
+  };
+  if (m.time.dt) {
+    name("fixed");
+    return *m.time.dt;
+  }
+  Real v_max = 0;
+  for (std::size_t i = 0; i < m.p.size(); ++i)
+    if (m.p.kind[i] == ParticleKind::fluid || (m.motion.moving() && m.p.kind[i] == ParticleKind::wall))
+      v_max = std::max(v_max, m.p.velocity[i].squaredNorm());
+  v_max = std::sqrt(v_max);
+  Real dt = m.time.dt_max;
+  name("dt_max");
+  const Real courant = m.time.cfl ? *m.time.cfl : 0.2;
+  if (v_max > 0 && courant * m.dp / v_max < dt) {  // eq. 52
+    dt = courant * m.dp / v_max;
+    name("cfl");
+  }
+  if (m.nu > 0 && m.opt.viscous_number * m.dp * m.dp / m.nu < dt) {
+    dt = m.opt.viscous_number * m.dp * m.dp / m.nu;
+    name("viscous");
+  }
+  return dt;
+}
+
+FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
+  Impl& m = *impl_;
+  FluidStepReport report;
+  report.dt = dt;
+  auto t0 = Clock::now();
+  const auto t_begin = t0;
+  const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
+  if (m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0)
+    m.p.reorder(cell_order(m.p.position, m.r_max));
+  m.classify();
+  m.move_walls(t + dt);
+  report.t_rest += seconds_since(t0);
+
+  t0 = Clock::now();
+  build_neighbour_list(m.p.position, m.r_max, m.nl, m.grid);
+  report.t_neighbours += seconds_since(t0);
+
+  t0 = Clock::now();
+  m.predict(dt);
+  report.t_rest += seconds_since(t0);
+  t0 = Clock::now();
+  m.build_near_list();
+  report.t_neighbours += seconds_since(t0);
+  t0 = Clock::now();
+  m.collide(dt);
+  m.density_and_surface();
+  report.t_rest += seconds_since(t0);
+
+  t0 = Clock::now();
+  m.assemble(dt);
+  report.t_assembly += seconds_since(t0);
+  const PressureSolveResult res = m.solve_pressure();
+  report.t_assembly += res.t_matrix;
+  report.t_setup = res.t_setup;
+  report.t_solve = res.t_solve;
+  report.iterations = res.iterations;
+  report.residual = res.residual;
+  report.n_rows = m.particle_of_row.size();
+  if (!res.converged)
+    throw std::runtime_error(fmt::format(
+        "the pressure solve did not converge: {} iterations, true relative residual {:.3e} > tolerance {:.1e} "
+        "({} rows, preconditioner '{}'); raise fluid.max_iterations, use another fluid.preconditioner or reduce dt",
+        res.iterations, res.residual, m.tolerance, report.n_rows, m.preconditioner));
+
+  t0 = Clock::now();
+  m.correct(dt);
+  const auto& surface = m.p.scalar_field("free_surface");
+  for (std::size_t i = 0; i < m.p.size(); ++i) report.n_surface += surface[i] != 0;
+  report.n_removed = m.remove_escaped();
+  for (std::size_t i = 0; i < m.p.size(); ++i)
+    if (m.p.kind[i] == ParticleKind::fluid) report.max_speed = std::max(report.max_speed, m.p.velocity[i].norm());
+  ++m.n_steps;
+  report.t_rest += seconds_since(t0);
+  const double total = seconds_since(t_begin);
+  report.t_rest = total - report.t_neighbours - report.t_assembly - report.t_setup - report.t_solve;
+  return report;
+}
+
+std::size_t FluidSolver::memory_bytes() const {
+  const Impl& m = *impl_;
+  std::size_t bytes = m.nl.memory_bytes() + m.near.memory_bytes();
+  bytes += m.sys.col.capacity() * sizeof(GlobalId) + m.sys.value.capacity() * sizeof(Real) +
+           m.sys.row_ptr.capacity() * sizeof(std::size_t) + m.sys.rhs.capacity() * sizeof(Real);
+  bytes += m.n_star.capacity() * sizeof(Real) + (m.v_new.capacity() + m.dv.capacity()) * sizeof(Vec) +
+           m.row_of.capacity() * sizeof(GlobalId) + m.particle_of_row.capacity() * sizeof(LocalIndex) +
+           m.x_all.capacity() * sizeof(Real) + m.roles.capacity();
+  bytes += m.solver->memory_bytes();
+  return bytes;
+}
+
+}  // namespace mpsfsi
+
+namespace mpsfsi {
+const LocalRows& FluidSolver::last_system() const { return impl_->sys; }
+const std::vector<LocalIndex>& FluidSolver::row_particles() const { return impl_->particle_of_row; }
+const LatticeConstants& FluidSolver::lattice_gradient() const { return impl_->lat_g; }
+const LatticeConstants& FluidSolver::lattice_laplacian() const { return impl_->lat_l; }
 }  // namespace mpsfsi

@@ -5,6 +5,8 @@
 #pragma once
 
 #include "core/particles.hpp"
+#include "fluid/pressure_solver.hpp"
+#include "core/kernel.hpp"
 #include "io/case.hpp"
 
 #include <mpi.h>
@@ -32,7 +34,9 @@ struct FluidOptions {
   Real collision_distance = 0.5;   ///< collision model: pairs closer than this x dp (mps-practice notes)
   Real restitution = 0.2;          ///< collision model: restitution coefficient
   int reorder_every = 20;          ///< cell-order the particles every N steps (0: never; skipped with solids)
-  int muelu_rebuild_every = 10;    ///< MueLu: full hierarchy setup every N steps, reuse in between
+  /// MueLu: full hierarchy setup every N steps, reuse (tP) in between. Reuse needs an unchanged matrix
+  /// graph, which moving particles do not give: keep 1 (measured: MueLu throws "new entry into a static graph").
+  int muelu_rebuild_every = 1;
   Real viscous_number = 0.2;       ///< viscous limit dt <= viscous_number dp^2 / nu
   /// Solid particles take part as boundary particles with prescribed position and velocity (PPE rows,
   /// number density, collisions), like wall particles. Off: solids are ignored by the fluid.
@@ -56,6 +60,13 @@ class FluidSolver {
 
   /// Bytes held by the fluid's work arrays, neighbour list, matrix and preconditioner on this rank.
   std::size_t memory_bytes() const;
+
+  /// Diagnostics and tests: this rank's rows of the last pressure system, the particle (local index at
+  /// the time of the solve) of each row, and the lattice constants used (density/gradient, Laplacian).
+  const LocalRows& last_system() const;
+  const std::vector<LocalIndex>& row_particles() const;
+  const LatticeConstants& lattice_gradient() const;
+  const LatticeConstants& lattice_laplacian() const;
 
  private:
   struct Impl;

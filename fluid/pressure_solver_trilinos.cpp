@@ -222,7 +222,7 @@ class TrilinosPressureSolver final : public PressureSolver {
         params.set("coarse: type", std::string("RELAXATION"));
         params.set("coarse: max size", 64);
         params.set("smoother: type", std::string("CHEBYSHEV"));
-        params.set("reuse: type", std::string("RP"));
+        params.set("reuse: type", std::string("tP"));
         RCP<OP> A_op = A_;
         muelu_ = MueLu::CreateTpetraPreconditioner(A_op, params);
       } else {

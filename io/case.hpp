@@ -45,6 +45,10 @@ struct SolidMaterial {
   Real E = 1e6;       ///< Young's modulus [Pa]
   Real nu = 0.3;      ///< Poisson's ratio
   std::optional<Real> fracture_strain;  ///< eps_max of seed 004 eq. 47; none: unbreakable
+  /// Optional P- and S-wave speeds [m/s] (seed 000 §4): when given they define the Lame constants of
+  /// the 2D model directly (mu = rho vs^2, lambda = rho (vp^2 - 2 vs^2)); E and nu then hold the
+  /// equivalent (3D / plane-strain) values.
+  std::optional<Real> vp, vs;
 };
 
 enum class BodyKind { fluid, solid };
@@ -113,6 +117,25 @@ struct FluidNumerics {
 struct SolidNumerics {
   Real re = 2.1;                ///< effective radius of the bonds, in units of dp
   std::optional<Real> dt;       ///< solid time step for solid-only runs [s]
+  bool plane_stress = false;    ///< 2D Lame constants: false = plane strain (eq. 4 as written), true = plane stress
+  Real dt_factor = 0.2;         ///< stable dt = dt_factor * dp / c_p
+  Real contact_stiffness = 1.0; ///< contact spring / nearest-neighbour bond stiffness (seed 004 §4.4)
+  /// n0 of eq. 30 and 36-38: "particle" (each particle's initial n_i^0, seed 004; pair terms use the
+  /// mean of 1/n_i^0 and 1/n_j^0 so that forces stay equal and opposite) | "lattice" (one n0, seed 000).
+  std::string normalisation = "particle";
+};
+
+/// A time-dependent pressure on a region of a solid body's particles (seed 000 §4, Hopkinson bar):
+/// p(t) = peak exp(-((t - time) / width)^2); each particle in the region gets the force
+/// p(t) dp^(d-1) along `direction`.
+struct SolidLoadSpec {
+  std::string name;
+  std::string body;             ///< a solid body
+  Rect region;                  ///< particles of the body inside (initial positions) are loaded
+  Vec direction = Vec(1, 0);    ///< unit direction of the force
+  Real peak = 0;                ///< peak pressure [Pa]
+  Real time = 0;                ///< time of the peak [s]
+  Real width = 1;               ///< 1/e half-width of the Gaussian [s]
 };
 
 struct OutputSpec {
@@ -137,6 +160,7 @@ struct CaseSpec {
   CouplingSpec coupling;
   FluidNumerics fluid;
   SolidNumerics solid;
+  std::vector<SolidLoadSpec> solid_loads;
   std::vector<ProbeSpec> probes;
   OutputSpec output;
   std::string resolved_yaml;    ///< the case after every override, as YAML (saved with the results)

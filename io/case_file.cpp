@@ -528,9 +528,6 @@ void read_time(MapReader r, TimeSpec& time) {
   if (time.dt && time.cfl)
     src.fail(r.at("cfl"), "time: both dt and cfl are given; expected exactly one of time.dt (fixed step [s]) or "
                           "time.cfl (adaptive step)");
-  if (!time.dt && !time.cfl)
-    src.fail(r.field(), "missing key 'dt' or 'cfl' in time; expected exactly one of: time.dt, a positive number [s]; "
-                        "or time.cfl, a Courant number C with 0 < C <= 1");
   if (time.dt && *time.dt > time.end)
     src.expected(r.at("dt"), fmt::format("a time step no larger than time.end = {:g} s", time.end));
   if (dt_max && time.dt)
@@ -556,8 +553,23 @@ void read_materials(MapReader r, CaseSpec& spec) {
       SolidMaterial s;
       s.name = name;
       s.rho = m.number("rho", positive, "a positive number (density) [kg/m3]");
-      s.E = m.number("E", positive, "a positive number (Young's modulus) [Pa]");
-      s.nu = m.number("nu", in_open(-1, 0.5), "a number in (-1, 0.5) (Poisson's ratio)");
+      // Elastic constants: either E and nu, or the wave speeds vp and vs (then E and nu are the equivalents).
+      if (m.has("vp") || m.has("vs")) {
+        s.vp = m.number("vp", positive, "a positive number (P-wave speed, given with vs) [m/s]");
+        s.vs = m.number("vs", positive, "a positive number (S-wave speed, given with vp) [m/s]");
+        if (!(*s.vp > std::sqrt(4.0 / 3.0) * *s.vs))
+          src.expected(m.at("vp"), fmt::format("vp > sqrt(4/3) vs = {:g} m/s (positive bulk modulus)", std::sqrt(4.0 / 3.0) * *s.vs));
+        if (m.has("E") || m.has("nu"))
+          src.fail(m.at(m.has("E") ? "E" : "nu"), fmt::format("{}: expected either E and nu or vp and vs, not both",
+                                                               m.field().path));
+        const Real mu = s.rho * *s.vs * *s.vs;
+        const Real lambda = s.rho * (*s.vp * *s.vp - 2 * *s.vs * *s.vs);
+        s.E = mu * (3 * lambda + 2 * mu) / (lambda + mu);
+        s.nu = lambda / (2 * (lambda + mu));
+      } else {
+        s.E = m.number("E", positive, "a positive number (Young's modulus) [Pa]");
+        s.nu = m.number("nu", in_open(-1, 0.5), "a number in (-1, 0.5) (Poisson's ratio)");
+      }
       s.fracture_strain = m.optional_number("fracture_strain", positive, "a positive number (strain at which bonds break)");
       spec.solid_materials.push_back(s);
     }
@@ -765,7 +777,44 @@ void read_fluid_numerics(MapReader r, FluidNumerics& n) {
 void read_solid_numerics(MapReader r, SolidNumerics& n) {
   n.re = r.number("re", n.re, [](Real x) { return x > 1; }, "a number > 1 (effective radius of the bonds, in units of dp)");
   n.dt = r.optional_number("dt", positive, "a positive number (solid time step) [s]");
+  n.plane_stress = r.boolean("plane_stress", n.plane_stress, "true (plane stress) or false (plane strain)");
+  n.dt_factor = r.number("dt_factor", n.dt_factor, in_half_open(0, 1), "a number in (0, 1] (stable dt = dt_factor dp / c_p)");
+  n.contact_stiffness = r.number("contact_stiffness", n.contact_stiffness, non_negative,
+                                 "a non-negative number (contact spring / nearest-neighbour bond stiffness)");
+  n.normalisation = r.choice("normalisation", n.normalisation, {"particle", "lattice"});
   r.finish();
+}
+
+void read_solid_loads(MapReader& top, CaseSpec& spec) {
+  const Source& src = top.source();
+  std::map<std::string, std::string> names;
+  for (const Field& item : top.list("solid_loads", "a list of pressure pulses, each {name, body, region, ...}", false)) {
+    MapReader r(src, item, "a solid load {name, body, region, direction, peak, time, width}");
+    SolidLoadSpec l;
+    l.name = unique_name(r, names, "solid loads");
+    l.body = r.name("body", "the name of a solid body");
+    l.region = r.rect("region", rect_form + " (particles of the body inside are loaded)");
+    l.direction = r.vec("direction", "a non-zero direction [x, y] of the force");
+    l.peak = r.number("peak", any_number, "a number (peak pressure) [Pa]");
+    l.time = r.number("time", non_negative, "a non-negative number (time of the peak) [s]");
+    l.width = r.number("width", positive, "a positive number (1/e half-width of the pulse) [s]");
+    r.finish();
+    if (!(l.direction.norm() > 0)) src.expected(r.at("direction"), "a non-zero direction [x, y] of the force");
+    const auto b = std::find_if(spec.bodies.begin(), spec.bodies.end(), [&](const BodySpec& s) { return s.name == l.body; });
+    if (b == spec.bodies.end() || b->kind != BodyKind::solid) {
+      std::vector<std::string> solids;
+      for (const auto& s : spec.bodies)
+        if (s.kind == BodyKind::solid) solids.push_back(s.name);
+      src.fail(r.at("body"), fmt::format("{} = {}: {}; expected a solid body (one of: {})", r.path_of("body"), l.body,
+                                         b == spec.bodies.end() ? "unknown body" : "'" + l.body + "' is a fluid body",
+                                         solids.empty() ? std::string("none defined") : join(solids)));
+    }
+    if (!overlaps(l.region, b->rect))
+      src.fail(r.at("region"), fmt::format("{} = {} does not overlap body '{}' {}: expected a region that covers part of "
+                                           "the body",
+                                           r.path_of("region"), show_rect(l.region), b->name, show_rect(b->rect)));
+    spec.solid_loads.push_back(l);
+  }
 }
 
 void read_probes(MapReader& top, CaseSpec& spec) {
@@ -840,13 +889,20 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   GeometryFields geometry;
   read_bodies(top, spec, body_and_wall_names, geometry);
   read_walls(top, spec, body_and_wall_names, geometry);
+  // The fluid needs a time step rule; a solid-only case may use the solid's own (solid.dt or stable dt).
+  const bool has_fluid = std::any_of(spec.bodies.begin(), spec.bodies.end(),
+                                     [](const BodySpec& b) { return b.kind == BodyKind::fluid; });
+  if (has_fluid && !spec.time.dt && !spec.time.cfl)
+    src.fail(top.at("time"), "missing key 'dt' or 'cfl' in time; expected exactly one of: time.dt, a positive number [s]; "
+                             "or time.cfl, a Courant number C with 0 < C <= 1 (needed with fluid bodies)");
   check_body_materials(src, spec, geometry);
   check_geometry(src, spec, geometry, top.at("dp"));
 
   read_tank_motion(top.optional_map("tank_motion", "a map {type: none | sine_roll | table, ...}"), base_dir, spec);
   read_coupling(top.optional_map("coupling", "a map {subcycles}"), spec.coupling);
   read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.fluid);
-  read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt}"), spec.solid);
+  read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid);
+  read_solid_loads(top, spec);
   read_probes(top, spec);
   read_output(top.optional_map("output", "a map {interval, fields}"), spec.output);
   top.finish();

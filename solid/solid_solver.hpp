@@ -2,34 +2,70 @@
 // fracture and contact), as a participant of the run loop: the driver asks for a stable dt and
 // advances it one sub-step at a time. External loads (e.g. from the fluid) arrive in the vector
 // field "solid_load" (force per particle [N per unit thickness]).
+//
+// Equations: relative displacement with the pair's mean rotation removed (seed 004 eq. 25-29, seed 000
+// eq. 7-12), volumetric strain eq. 30, stresses eq. 31-33, accelerations eq. 36-38, shear torque
+// eq. 41-44, symplectic Euler eq. 39-40 and 45-46, brittle fracture eq. 47, surface particles eq. 48,
+// contact of unbonded surface particles §4.4. Lame constants from E and nu by eq. 4 (plane strain) or
+// the plane-stress reduction, or from the wave speeds vp, vs (seed 000 §4).
 #pragma once
 
 #include "core/particles.hpp"
 #include "io/case.hpp"
 
 #include <memory>
+#include <string>
 
 namespace mpsfsi {
 
 struct SolidStepReport {
   std::size_t n_broken = 0;    ///< bonds broken so far
   Real max_speed = 0;          ///< largest solid particle speed [m/s]
+  std::size_t n_contacts = 0;  ///< unbonded surface pairs in contact in this step
+};
+
+/// Conserved quantities of the solid particles (per unit thickness), for tests and logs.
+struct SolidDiagnostics {
+  Vec momentum = Vec::Zero();   ///< sum m v [kg m/s]
+  Real angular_momentum = 0;    ///< sum m (x cross v) + I omega, about the origin [kg m2/s]
+  Real kinetic = 0;             ///< sum m v^2 / 2 [J]
+  Real rotational = 0;          ///< sum I omega^2 / 2 [J]
+  Real strain = 0;              ///< bond energy + volumetric energy (the potential of eq. 36-38, 43) [J]
+  Real contact = 0;             ///< energy stored in the contact springs [J]
+  Real total() const { return kinetic + rotational + strain + contact; }
 };
 
 class SolidSolver {
  public:
-  /// Builds the bonds (reference configuration) and registers the solid's fields on `particles`.
+  /// Builds the bonds (reference configuration) and registers the solid's fields on `particles`:
+  /// rotation, angular_velocity, displacement, von_mises, solid_pressure, fragment, surface, solid_load.
+  /// Throws CaseError for inconsistent input (e.g. a load on an unknown body).
   SolidSolver(const CaseSpec& spec, ParticleSet& particles);
   ~SolidSolver();
   SolidSolver(const SolidSolver&) = delete;
   SolidSolver& operator=(const SolidSolver&) = delete;
 
-  /// Stable explicit time step of the solid (the constant used is documented in the .cpp).
+  /// Stable explicit time step of the solid: dt_factor * dp / c_p (c_p the largest P-wave speed,
+  /// sqrt((lambda + 2 mu) / rho)); see docs/validation.md for the measured stability limit.
   Real stable_dt() const;
-  /// One explicit step from t to t + dt (seed 004 eq. 25-46).
+  /// One explicit step from t to t + dt (seed 004 eq. 25-48).
   SolidStepReport advance(Real t, Real dt);
-  /// Called by the driver just before an output frame: refresh derived fields (stress, fragments).
+  /// Called by the driver just before an output frame: refresh derived fields (stress, displacement,
+  /// fragments) and append to fragments.csv when an output directory is set.
   void prepare_output(Real t);
+  /// Directory for fragments.csv (written at every prepare_output); empty: no file.
+  void set_output_directory(const std::string& dir);
+
+  SolidDiagnostics diagnostics() const;
+  /// Number of fragments (connected components of intact bonds) at the last prepare_output.
+  std::size_t n_fragments() const;
+  /// Smallest distance between two solid particles of different fragments (fragments as at the last
+  /// prepare_output), or +inf. O(N); for tests.
+  Real min_distance_between_fragments() const;
+  /// Intact bonds (each pair once).
+  std::size_t n_bonds() const;
+  /// Bytes held by the solver (bonds, per-particle arrays, scratch).
+  std::size_t memory_bytes() const;
 
  private:
   struct Impl;

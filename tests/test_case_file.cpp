@@ -143,6 +143,16 @@ TEST(CaseFile, ValidCaseGivesTheExpectedValues) {
   EXPECT_DOUBLE_EQ(c.fluid.beta2, 0.85);  // default
   EXPECT_DOUBLE_EQ(c.solid.re, 2.1);
   EXPECT_FALSE(c.solid.dt);
+  EXPECT_TRUE(c.solid.plane_stress);
+  EXPECT_DOUBLE_EQ(c.solid.dt_factor, 0.3);
+  EXPECT_DOUBLE_EQ(c.solid.contact_stiffness, 0.5);
+  EXPECT_EQ(c.solid.normalisation, "lattice");
+  ASSERT_EQ(c.solid_loads.size(), 1u);
+  EXPECT_EQ(c.solid_loads[0].body, "plate");
+  EXPECT_DOUBLE_EQ(c.solid_loads[0].region.lo[1], 0.1);
+  EXPECT_DOUBLE_EQ(c.solid_loads[0].peak, 1000);
+  EXPECT_DOUBLE_EQ(c.solid_loads[0].width, 0.005);
+  EXPECT_FALSE(c.solid_materials[0].vp);
 
   ASSERT_EQ(c.probes.size(), 4u);
   EXPECT_EQ(c.probes[1].type, ProbeType::displacement);
@@ -178,6 +188,28 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_DOUBLE_EQ(c.output.interval, 0.01);
   EXPECT_TRUE(c.output.fields.empty());
   EXPECT_TRUE(c.bodies[0].velocity.isZero());
+  EXPECT_FALSE(c.solid.plane_stress);
+  EXPECT_EQ(c.solid.normalisation, "particle");
+  EXPECT_DOUBLE_EQ(c.solid.dt_factor, SolidNumerics{}.dt_factor);
+  EXPECT_TRUE(c.solid_loads.empty());
+}
+
+TEST(CaseFile, SolidFromWaveSpeeds) {
+  const CaseSpec c = parse_case(valid_with("E: 1.2e7, nu: 0.4", "vp: 100, vs: 50"), file_name);
+  const SolidMaterial& m = c.solid_materials[0];
+  ASSERT_TRUE(m.vp && m.vs);
+  EXPECT_DOUBLE_EQ(*m.vp, 100);
+  // E and nu are the equivalents: mu = rho vs^2 and lambda + 2 mu = rho vp^2.
+  const double mu = m.E / (2 * (1 + m.nu));
+  const double lambda = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu));
+  EXPECT_NEAR(mu, 1100 * 50.0 * 50.0, 1e-6 * mu);
+  EXPECT_NEAR(lambda + 2 * mu, 1100 * 100.0 * 100.0, 1e-6 * mu);
+
+  EXPECT_THAT(error_of(valid_with("E: 1.2e7, nu: 0.4", "vp: 100")), HasSubstr("missing key 'vs' in materials.rubber"));
+  EXPECT_THAT(error_of(valid_with("E: 1.2e7, nu: 0.4", "E: 1.2e7, vp: 100, vs: 50")),
+              HasSubstr("materials.rubber: expected either E and nu or vp and vs, not both"));
+  EXPECT_THAT(error_of(valid_with("E: 1.2e7, nu: 0.4", "vp: 50, vs: 50")),
+              HasSubstr("materials.rubber.vp = 50: expected vp > sqrt(4/3) vs"));
 }
 
 TEST(CaseFile, TableMotionFileIsResolvedRelativeToTheCaseFile) {
@@ -312,6 +344,13 @@ TEST(CaseFileErrors, TimeStepChoice) {
   const std::string neither = valid_with("  cfl: 0.2\n", "");
   EXPECT_THAT(error_of(neither), StartsWith(at_line(neither, "time:")));
   EXPECT_THAT(error_of(neither), HasSubstr("missing key 'dt' or 'cfl' in time"));
+  // A solid-only case needs neither.
+  const std::string solid_only = replaced(replaced(minimal_case, "time: {end: 0.5, dt: 1.0e-4}", "time: {end: 0.5}"),
+                                          "water: {type: fluid, rho: 1000, nu: 1.0e-6}",
+                                          "steel: {type: solid, rho: 7800, E: 2.0e11, nu: 0.3}");
+  EXPECT_EQ(error_of(replaced(solid_only, "kind: fluid, material: water", "kind: solid, material: steel")), "(no error)");
+  EXPECT_THAT(error_of(replaced(minimal_case, "time: {end: 0.5, dt: 1.0e-4}", "time: {end: 0.5}")),
+              HasSubstr("missing key 'dt' or 'cfl' in time"));
 }
 
 TEST(CaseFileErrors, OverlappingBodies) {
@@ -371,11 +410,30 @@ TEST(CaseFileErrors, ClampOnAFluidBody) {
 }
 
 TEST(CaseFileErrors, ProbeOfAnUnknownBody) {
-  const std::string text = valid_with("body: plate", "body: plank");
+  const std::string probe = "position: [0.406, 0.198], body: plate";
+  const std::string text = valid_with(probe, "position: [0.406, 0.198], body: plank");
   EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "body: plank") +
                                         " probes[1].body = plank: unknown body; expected the name of a solid body (one of: plate)"));
-  EXPECT_THAT(error_of(valid_with("body: plate", "body: column")), HasSubstr("'column' is a fluid body"));
-  EXPECT_THAT(error_of(valid_with(", body: plate", "")), HasSubstr("missing key 'body' in probes[1]"));
+  EXPECT_THAT(error_of(valid_with(probe, "position: [0.406, 0.198], body: column")), HasSubstr("'column' is a fluid body"));
+  EXPECT_THAT(error_of(valid_with(probe, "position: [0.406, 0.198]")), HasSubstr("missing key 'body' in probes[1]"));
+  EXPECT_THAT(error_of(valid_with(probe, "position: [0.3, 0.198], body: plate")),
+              HasSubstr("probes[1].position = [0.3, 0.198]: expected a point on body 'plate'"));
+}
+
+TEST(CaseFileErrors, SolidLoads) {
+  const std::string text = valid_with("body: plate, region", "body: column, region");
+  EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "body: column, region") +
+                                        " solid_loads[0].body = column: 'column' is a fluid body; expected a solid body "
+                                        "(one of: plate)"));
+  EXPECT_THAT(error_of(valid_with("region: {min: [0.4, 0.1]", "region: {min: [0.5, 0.1]")),
+              HasSubstr("solid_loads[0].region = {min: [0.5, 0.1], max: [0.404, 0.2]}: expected max > min"));
+  EXPECT_THAT(error_of(valid_with("region: {min: [0.4, 0.1], max: [0.404, 0.2]}", "region: {min: [0.5, 0.1], max: [0.504, 0.2]}")),
+              HasSubstr("solid_loads[0].region = {min: [0.5, 0.1], max: [0.504, 0.2]} does not overlap body 'plate'"));
+  EXPECT_THAT(error_of(valid_with("direction: [1, 0]", "direction: [0, 0]")),
+              HasSubstr("solid_loads[0].direction = [0, 0]: expected a non-zero direction"));
+  EXPECT_THAT(error_of(valid_with("width: 0.005", "width: 0")), HasSubstr("solid_loads[0].width = 0: expected a positive number"));
+  EXPECT_THAT(error_of(valid_with("normalisation: lattice", "normalisation: grid")),
+              HasSubstr("solid.normalisation = grid: expected one of: particle, lattice"));
 }
 
 TEST(CaseFileErrors, DuplicateNames) {
@@ -575,7 +633,7 @@ TEST(CaseFileFuzz, MutatedFilesParseOrThrowCaseError) {
       EXPECT_GT(c.dp, 0);
       EXPECT_FALSE(c.bodies.empty());
       for (const auto& b : c.bodies) EXPECT_TRUE((b.rect.hi.array() > b.rect.lo.array()).all());
-      EXPECT_TRUE(c.time.dt.has_value() != c.time.cfl.has_value());
+      EXPECT_FALSE(c.time.dt && c.time.cfl);
     } catch (const CaseError& e) {
       ++rejected;
       if (verbose) std::printf("  %s\n", e.what());

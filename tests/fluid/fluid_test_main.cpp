@@ -1,0 +1,11 @@
+// main() of the fluid tests: MPI is initialized around the GoogleTest run (the pressure solver needs it).
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  const int result = RUN_ALL_TESTS();
+  MPI_Finalize();
+  return result;
+}

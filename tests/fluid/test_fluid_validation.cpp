@@ -1,0 +1,156 @@
+// Validation of the fluid (label validation): hydrostatic pressure and rest (seed 004 §4.1, §4.3) and the
+// dam-break surge front against Martin & Moyce (1952) (cases/dam_break/martin_moyce_1952_surge_front.csv).
+// Both run the real case files at a coarse dp through FluidSolver, stepping like the run driver.
+#include "core/kernel.hpp"
+#include "core/neighbours.hpp"
+#include "core/operators.hpp"
+#include "fluid/fluid_solver.hpp"
+#include "io/case.hpp"
+#include "io/scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+using namespace mpsfsi;
+
+namespace {
+
+const std::string source_dir = MPSFSI_SOURCE_DIR;
+
+/// Step the fluid to `end`, calling `sample(t)` after every step.
+void run(const CaseSpec& spec, ParticleSet& p, const Real end, const std::function<void(Real)>& sample) {
+  FluidSolver fluid(spec, p, MPI_COMM_SELF);
+  Real t = 0;
+  int max_it = 0;
+  while (t < end - 1e-12) {
+    const Real dt = std::min(fluid.stable_dt(), end - t);
+    const FluidStepReport r = fluid.advance(t, dt);
+    max_it = std::max(max_it, r.iterations);
+    t += dt;
+    sample(t);
+  }
+  std::printf("  largest PPE iteration count %d\n", max_it);
+}
+
+/// Kernel-weighted pressure around x (as io/probes.cpp: re = 2.1 dp over fluid and wall particles).
+Real probe_pressure(const ParticleSet& p, const Vec& x, const Real dp) {
+  Real sw = 0, swp = 0;
+  const auto& pressure = p.scalar_field("pressure");
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.kind[i] != ParticleKind::fluid && p.kind[i] != ParticleKind::wall) continue;
+    const Real w = weight((p.position[i] - x).norm(), 2.1 * dp);
+    sw += w;
+    swp += w * pressure[i];
+  }
+  return sw > 0 ? swp / sw : 0.0;
+}
+
+Real mean_fluid_number_density(const ParticleSet& p, const Real re) {
+  NeighbourList nl;
+  build_neighbour_list(p.position, re, nl);
+  std::vector<Real> n;
+  number_density(p.position, nl, re, n);
+  Real sum = 0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.kind[i] == ParticleKind::fluid) {
+      sum += n[i];
+      ++count;
+    }
+  return sum / static_cast<Real>(count);
+}
+
+}  // namespace
+
+TEST(FluidValidation, HydrostaticPressureAndRest) {
+  const CaseSpec spec = load_case(source_dir + "/cases/hydrostatic.yaml", {"fluid.preconditioner=jacobi"});
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  const std::size_t n_fluid = p.n_of_kind(ParticleKind::fluid);
+  const Real re = spec.fluid.re_gradient * spec.dp;
+  const Real n_mean0 = mean_fluid_number_density(p, re);
+  const Real h = spec.bodies[0].rect.hi[1];
+  const Vec probe = spec.probes[0].position;
+  const Real g = -spec.gravity[1], rho = spec.fluid_materials[0].rho;
+  const Real expected = rho * g * (h - probe[1]);
+  const Real settle = 0.6, end = 1.0;
+  Real sum = 0;
+  int n_samples = 0;
+  Real next = settle;
+  run(spec, p, end, [&](const Real t) {
+    if (t + 1e-12 < next) return;
+    next += 0.01;
+    sum += probe_pressure(p, probe, spec.dp);
+    ++n_samples;
+  });
+  const Real mean = sum / n_samples;
+  Real v_max = 0;
+  Vec x_fast = Vec::Zero();
+  std::vector<Real> speeds;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.kind[i] == ParticleKind::fluid) {
+      speeds.push_back(p.velocity[i].norm());
+      if (speeds.back() > v_max) x_fast = p.position[i];
+      v_max = std::max(v_max, speeds.back());
+    }
+  std::sort(speeds.begin(), speeds.end());
+  std::printf("  fastest particle at (%.4f, %.4f); median speed %.2e, 99th percentile %.2e m/s\n", x_fast[0], x_fast[1],
+              speeds[speeds.size() / 2], speeds[speeds.size() * 99 / 100]);
+  const Real n_mean1 = mean_fluid_number_density(p, re);
+  std::printf("  hydrostatic: p(probe) mean over t in [%.2f, %.2f] = %.1f Pa, rho g h = %.1f Pa (%.2f %%); "
+              "max speed %.2e m/s = %.2f %% of sqrt(g h); mean n %.4f -> %.4f\n",
+              settle, end, mean, expected, 100 * (mean - expected) / expected, v_max, 100 * v_max / std::sqrt(g * h),
+              n_mean0, n_mean1);
+  EXPECT_NEAR(mean, expected, 0.05 * expected);
+  EXPECT_LT(v_max, 0.01 * std::sqrt(g * h));
+  EXPECT_EQ(p.n_of_kind(ParticleKind::fluid), n_fluid);
+  EXPECT_NEAR(n_mean1, n_mean0, 0.01 * n_mean0);
+}
+
+TEST(FluidValidation, DamBreakSurgeFront) {
+  const CaseSpec spec = load_case(source_dir + "/cases/dam_break.yaml", {"fluid.preconditioner=jacobi"});
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  // Experiment (T, Z).
+  std::ifstream in(source_dir + "/cases/dam_break/martin_moyce_1952_surge_front.csv");
+  ASSERT_TRUE(in.good());
+  std::vector<Real> te, ze;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#' || line[0] == 'T') continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream ls(line);
+    Real a = 0, b = 0;
+    if (ls >> a >> b) {
+      te.push_back(a);
+      ze.push_back(b);
+    }
+  }
+  ASSERT_EQ(te.size(), 5u);
+  const Real L = spec.bodies[0].rect.hi[0] - spec.bodies[0].rect.lo[0];
+  const Real g = -spec.gravity[1];
+  const Real t_scale = std::sqrt(2 * g / L);
+  const Real end = 3.05 / t_scale;
+  Real worst = 0;
+  int n_compared = 0;
+  run(spec, p, end, [&](const Real t) {
+    const Real T = t * t_scale;
+    if (T < 1.5 || T > 3.0) return;
+    // Front as io/probes.cpp: the largest x of fluid particles within 2 dp of the floor, to the outer edge.
+    Real x = -1;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.kind[i] == ParticleKind::fluid && p.position[i][1] < 2 * spec.dp) x = std::max(x, p.position[i][0]);
+    const Real Z = (x + 0.5 * spec.dp) / L;
+    const auto k = std::min<std::size_t>(te.size() - 2, static_cast<std::size_t>(std::upper_bound(te.begin(), te.end(), T) - te.begin()) - 1);
+    const Real z_exp = ze[k] + (ze[k + 1] - ze[k]) * (T - te[k]) / (te[k + 1] - te[k]);
+    const Real err = (Z - z_exp) / z_exp;
+    if (std::abs(err) > std::abs(worst)) worst = err;
+    ++n_compared;
+  });
+  std::printf("  dam break: %d samples for T in [1.5, 3.0], worst relative error of Z %.1f %%\n", n_compared, 100 * worst);
+  EXPECT_GT(n_compared, 50);
+  EXPECT_LT(std::abs(worst), 0.10);
+}
