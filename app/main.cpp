@@ -28,22 +28,25 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("mpsfsi ") + MPSFSI_VERSION);
 
+  // Options shared by run and check: the case, --dp and --set.
+  const auto add_case_options = [](CLI::App* cmd, RunOptions& o) {
+    cmd->add_option("case", o.case_file, "Case file (YAML)")->required()->check(CLI::ExistingFile);
+    cmd->add_option("--dp", o.dp, "Particle spacing [m] (overrides dp)");
+    cmd->add_option("--set", o.overrides, "Override a case value: dotted.key=value (repeatable)");
+  };
+
   RunOptions run_opts;
   auto* run = app.add_subcommand("run", "Run a case");
-  run->add_option("case", run_opts.case_file, "Case file (YAML)")->required()->check(CLI::ExistingFile);
+  add_case_options(run, run_opts);
   run->add_option("--end-time", run_opts.end_time, "End time [s] (overrides time.end)");
-  run->add_option("--dp", run_opts.dp, "Particle spacing [m] (overrides dp)");
   run->add_option("--subcycles", run_opts.subcycles, "Solid sub-steps per fluid step: N or auto (overrides coupling.subcycles)");
   run->add_option("--output", run_opts.output, "Output folder (default out/<case name>)");
-  run->add_option("--set", run_opts.overrides, "Override a case value: dotted.key=value (repeatable)");
   run->add_flag("--overwrite", run_opts.overwrite, "Allow writing into an existing output folder");
   run->add_flag("--quiet", run_opts.quiet, "Print only the summary and errors");
 
   RunOptions check_opts;
   auto* check = app.add_subcommand("check", "Validate a case; print particle counts per body and the memory estimate");
-  check->add_option("case", check_opts.case_file, "Case file (YAML)")->required()->check(CLI::ExistingFile);
-  check->add_option("--dp", check_opts.dp, "Particle spacing [m] (overrides dp)");
-  check->add_option("--set", check_opts.overrides, "Override a case value: dotted.key=value (repeatable)");
+  add_case_options(check, check_opts);
   check->add_option("--output", check_opts.output, "Also write the initial particles (.vtu/.pvd) into this folder");
 
   try {

@@ -94,31 +94,28 @@ const std::vector<Vec>& ParticleSet::vector_field(const std::string& name) const
   return find_field(vector_fields_, name);
 }
 
+template <class F>
+void ParticleSet::for_each_array(F&& f) {
+  f(position);
+  f(velocity);
+  f(kind);
+  f(body);
+  f(material);
+  f(clamped);
+  f(global_id);
+  for (auto& [name, a] : scalar_fields_) f(a);
+  for (auto& [name, a] : vector_fields_) f(a);
+}
+
 void ParticleSet::reorder(const std::vector<LocalIndex>& order) {
   assert(order.size() == size());
-  permute(position, order);
-  permute(velocity, order);
-  permute(kind, order);
-  permute(body, order);
-  permute(material, order);
-  permute(clamped, order);
-  permute(global_id, order);
-  for (auto& [name, f] : scalar_fields_) permute(f, order);
-  for (auto& [name, f] : vector_fields_) permute(f, order);
+  for_each_array([&](auto& a) { permute(a, order); });
 }
 
 std::size_t ParticleSet::remove_if(const std::vector<std::uint8_t>& remove) {
   assert(remove.size() == size());
   const std::size_t before = size();
-  compact(position, remove);
-  compact(velocity, remove);
-  compact(kind, remove);
-  compact(body, remove);
-  compact(material, remove);
-  compact(clamped, remove);
-  compact(global_id, remove);
-  for (auto& [name, f] : scalar_fields_) compact(f, remove);
-  for (auto& [name, f] : vector_fields_) compact(f, remove);
+  for_each_array([&](auto& a) { compact(a, remove); });
   return before - size();
 }
 

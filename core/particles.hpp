@@ -68,6 +68,10 @@ class ParticleSet {
   std::size_t memory_bytes() const;
 
  private:
+  /// Apply f to every per-particle array (core and extra fields).
+  template <class F>
+  void for_each_array(F&& f);
+
   std::map<std::string, std::vector<Real>> scalar_fields_;
   std::map<std::string, std::vector<Vec>> vector_fields_;
   std::map<std::string, Real> scalar_defaults_;

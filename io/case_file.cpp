@@ -781,7 +781,7 @@ void read_solid_numerics(MapReader r, SolidNumerics& n) {
   n.dt_factor = r.number("dt_factor", n.dt_factor, in_half_open(0, 1), "a number in (0, 1] (stable dt = dt_factor dp / c_p)");
   n.contact_stiffness = r.number("contact_stiffness", n.contact_stiffness, non_negative,
                                  "a non-negative number (contact spring / nearest-neighbour bond stiffness)");
-  n.normalisation = r.choice("normalisation", n.normalisation, {"particle", "lattice"});
+  n.normalisation = r.choice("normalisation", n.normalisation, {"particle", "lattice", "mean"});
   r.finish();
 }
 

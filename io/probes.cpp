@@ -11,11 +11,20 @@
 
 namespace mpsfsi {
 
+namespace {
+/// Largest coordinate `axis` of the fluid particles whose other coordinate is below `limit`,
+/// extended by half a particle to the fluid's outer edge.
+Real fluid_extent(const ParticleSet& p, const int axis, const Real limit, const Real dp) {
+  const int other = 1 - axis;
+  Real m = -std::numeric_limits<Real>::max();
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.kind[i] == ParticleKind::fluid && p.position[i][other] < limit) m = std::max(m, p.position[i][axis]);
+  return m + 0.5 * dp;
+}
+}  // namespace
+
 ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path)
     : dp_(spec.dp) {
-  x_back_ = std::numeric_limits<Real>::max();
-  for (const auto& b : spec.bodies)
-    if (b.kind == BodyKind::fluid) x_back_ = std::min(x_back_, b.rect.lo[0]);
   for (const auto& ps : spec.probes) {
     Probe p{ps, -1, Vec::Zero()};
     if (ps.type == ProbeType::displacement) {
@@ -63,24 +72,12 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p) const {
         values.push_back(sw > 0 ? swp / sw : 0.0);
         break;
       }
-      case ProbeType::surge_front: {
-        // Largest x of fluid particles within 2 dp of the floor (probe position y is the floor).
-        Real x = -std::numeric_limits<Real>::max();
-        for (std::size_t i = 0; i < p.size(); ++i)
-          if (p.kind[i] == ParticleKind::fluid && p.position[i][1] < probe.spec.position[1] + 2 * dp_)
-            x = std::max(x, p.position[i][0]);
-        values.push_back(x + 0.5 * dp_);  // to the particle's outer edge
+      case ProbeType::surge_front:  // largest x of the fluid within 2 dp of the floor (probe y)
+        values.push_back(fluid_extent(p, 0, probe.spec.position[1] + 2 * dp_, dp_));
         break;
-      }
-      case ProbeType::column_height: {
-        // Largest y of fluid particles within 2 dp of the back wall (probe position x is the wall).
-        Real y = -std::numeric_limits<Real>::max();
-        for (std::size_t i = 0; i < p.size(); ++i)
-          if (p.kind[i] == ParticleKind::fluid && p.position[i][0] < probe.spec.position[0] + 2 * dp_)
-            y = std::max(y, p.position[i][1]);
-        values.push_back(y + 0.5 * dp_);
+      case ProbeType::column_height:  // largest y of the fluid within 2 dp of the back wall (probe x)
+        values.push_back(fluid_extent(p, 1, probe.spec.position[0] + 2 * dp_, dp_));
         break;
-      }
       case ProbeType::displacement: {
         Vec d = Vec::Constant(std::numeric_limits<Real>::quiet_NaN());
         for (std::size_t i = 0; i < p.size(); ++i)

@@ -31,7 +31,6 @@ class ProbeWriter {
     Vec initial = Vec::Zero();
   };
   Real dp_;
-  Real x_back_ = 0;           ///< the back wall (smallest x of the fluid's container)
   std::vector<Probe> probes_;
   std::vector<std::string> columns_;
   std::ofstream out_;

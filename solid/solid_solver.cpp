@@ -142,12 +142,9 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   plane_stress = spec.solid.plane_stress;
   gravity = spec.gravity;
   n_total = p.size();
-  bool per_particle = true;
-  if (spec.solid.normalisation == "lattice")
-    per_particle = false;
-  else if (spec.solid.normalisation != "particle")
-    throw CaseError(fmt::format("{}: solid.normalisation = '{}': expected particle or lattice", spec.file,
-                                spec.solid.normalisation));
+  const std::string& norm = spec.solid.normalisation;
+  if (norm != "particle" && norm != "lattice" && norm != "mean")
+    throw CaseError(fmt::format("{}: solid.normalisation = '{}': expected particle, lattice or mean", spec.file, norm));
 
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.kind[i] == ParticleKind::solid) pid.push_back(static_cast<LocalIndex>(i));
@@ -232,7 +229,8 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   n_max = 0;
   for (std::size_t i = 0; i < ns; ++i) {
     n_max = std::max(n_max, n0[i]);
-    inv_n0[i] = per_particle ? (n0[i] > 0 ? 1 / n0[i] : 0) : 1 / n0_lattice;
+    const Real n0_used = norm == "particle" ? n0[i] : norm == "lattice" ? n0_lattice : 0.5 * (n0[i] + n0_lattice);
+    inv_n0[i] = n0_used > 0 ? 1 / n0_used : 0;
     n_now[i] = n0[i];
   }
   n_max = std::max(n_max, n0_lattice);

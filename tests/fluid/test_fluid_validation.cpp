@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -20,6 +21,16 @@ using namespace mpsfsi;
 namespace {
 
 const std::string source_dir = MPSFSI_SOURCE_DIR;
+
+/// The case's overrides plus any from MPSFSI_FLUID_TEST_SET ("key=value;key=value"), for experiments.
+std::vector<std::string> overrides(std::vector<std::string> base) {
+  if (const char* env = std::getenv("MPSFSI_FLUID_TEST_SET")) {
+    std::istringstream in(env);
+    for (std::string item; std::getline(in, item, ';');)
+      if (!item.empty()) base.push_back(item);
+  }
+  return base;
+}
 
 /// Step the fluid to `end`, calling `sample(t)` after every step.
 void run(const CaseSpec& spec, ParticleSet& p, const Real end, const std::function<void(Real)>& sample) {
@@ -67,7 +78,7 @@ Real mean_fluid_number_density(const ParticleSet& p, const Real re) {
 }  // namespace
 
 TEST(FluidValidation, HydrostaticPressureAndRest) {
-  const CaseSpec spec = load_case(source_dir + "/cases/hydrostatic.yaml", {"fluid.preconditioner=jacobi"});
+  const CaseSpec spec = load_case(source_dir + "/cases/hydrostatic.yaml", overrides({"fluid.preconditioner=jacobi"}));
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   const std::size_t n_fluid = p.n_of_kind(ParticleKind::fluid);
@@ -112,7 +123,7 @@ TEST(FluidValidation, HydrostaticPressureAndRest) {
 }
 
 TEST(FluidValidation, DamBreakSurgeFront) {
-  const CaseSpec spec = load_case(source_dir + "/cases/dam_break.yaml", {"fluid.preconditioner=jacobi"});
+  const CaseSpec spec = load_case(source_dir + "/cases/dam_break.yaml", overrides({"fluid.preconditioner=jacobi"}));
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   // Experiment (T, Z).
