@@ -120,9 +120,10 @@ struct SolidNumerics {
   bool plane_stress = false;    ///< 2D Lame constants: false = plane strain (eq. 4 as written), true = plane stress
   Real dt_factor = 0.2;         ///< stable dt = dt_factor * dp / c_p
   Real contact_stiffness = 1.0; ///< contact spring / nearest-neighbour bond stiffness (seed 004 §4.4)
-  /// n0 of eq. 30 and 36-38: "particle" (each particle's initial n_i^0, seed 004; pair terms use the
-  /// mean of 1/n_i^0 and 1/n_j^0 so that forces stay equal and opposite) | "lattice" (one n0, seed 000).
-  std::string normalisation = "particle";
+  /// n0 of eq. 30 and 36-38: "mean" ((n_i^0 + n0)/2: surface rows get the stiffness of interior
+  /// rows, see docs/validation.md) | "particle" (each particle's initial n_i^0, seed 004) | "lattice"
+  /// (one n0, seed 000). Pair terms use the mean of 1/n_i and 1/n_j so forces stay equal and opposite.
+  std::string normalisation = "mean";
 };
 
 /// A time-dependent pressure on a region of a solid body's particles (seed 000 §4, Hopkinson bar):

@@ -35,6 +35,7 @@ import ast
 import math
 import operator
 import os
+import re
 import sys
 
 
@@ -176,8 +177,8 @@ def parse_args(argv):
     p.add_argument("--y-expr", help="expression for each plotted run column; `y` is the column (e.g. 'y/L')")
     p.add_argument("--scale-x", type=float, default=1.0, help="factor on the run's x (after --x-expr)")
     p.add_argument("--scale-y", type=float, default=1.0, help="factor on the run's y (after --y-expr)")
-    p.add_argument("--const", nargs="+", default=[], metavar="NAME=VALUE",
-                   help="constants for the expressions, e.g. --const L=0.146 g=9.81")
+    p.add_argument("--const", nargs="+", action="extend", default=[], metavar="NAME=VALUE",
+                   help="constants for the expressions, e.g. --const L=0.146 g=9.81 (put it after the probe file)")
     p.add_argument("--reference", help="reference data file (CSV/TSV, '#' comments, header line)")
     p.add_argument("--ref-columns",
                    help="reference columns: x,y[,y2...] (default: the first two columns of the file)")
@@ -186,7 +187,7 @@ def parse_args(argv):
     p.add_argument("--ref-target", help="plotted column whose subplot gets the reference (default: the first)")
     p.add_argument("--ref-label", help="legend label of the reference (default: file name and column)")
     p.add_argument("--label", help="legend label of the run (default: 'mpsfsi')")
-    p.add_argument("--title", help="figure title (default: the probe file's path)")
+    p.add_argument("--title", help="figure title (default: the probe file's path and the reference's name; '' for none)")
     p.add_argument("--xlabel", help="x axis label (default: the x expression or 'time [s]')")
     p.add_argument("--ylabel", help="y axis label of every subplot (default: the column name or y expression)")
     p.add_argument("--xlim", help="x range as lo,hi")
@@ -290,22 +291,28 @@ def main(argv=None):
         if ref is not None and ref[0] == c:
             _, rx, curves, rname = ref
             for k, (rcname, ry) in enumerate(curves):
-                if args.ref_label:
-                    label = args.ref_label if len(curves) == 1 else f"{args.ref_label}: {rcname}"
+                if len(curves) == 1:
+                    label = args.ref_label or f"reference ({rcname})"
                 else:
-                    label = f"{rname}: {rcname}"
-                ax.plot(rx, ry, ref_markers[k % len(ref_markers)], color=f"C{k + 1}", ms=5, mfc="none", mew=1.3,
-                        label=label, ls="--" if len(rx) > 40 else "none", lw=0.8)
-        ax.set_ylabel(args.ylabel or (f"{c}: {args.y_expr}" if args.y_expr else c))
+                    label = f"{args.ref_label}: {rcname}" if args.ref_label else rcname
+                dense = len(rx) > 40
+                ax.plot(rx, ry, ref_markers[k % len(ref_markers)], color=f"C{k + 1}", ms=3.5 if dense else 5.5,
+                        mfc="none", mew=1.1 if dense else 1.4, label=label, ls="--" if dense else "none", lw=0.8)
+        ax.set_ylabel(args.ylabel or (re.sub(r"\by\b", c, args.y_expr) if args.y_expr else c))
         ax.grid(True, color="0.88", lw=0.7)
         ax.margins(x=0.01)
-        if ref is not None and ref[0] == c or n == 1:
-            ax.legend(loc="best", frameon=True, framealpha=0.9)
+        if ref is not None and ref[0] == c:
+            ax.legend(loc="best", frameon=True, framealpha=0.85, edgecolor="0.8")
     axes[-1].set_xlabel(args.xlabel or (args.x_expr if args.x_expr else
                                         ("time [s]" if args.x_column == "time" else args.x_column)))
     if args.xlim:
         axes[-1].set_xlim(*parse_pair(args.xlim, "--xlim"))
-    fig.suptitle(args.title if args.title is not None else os.path.relpath(args.probes), fontsize=12)
+    if args.title is None:
+        title = os.path.relpath(args.probes) + (f" against {os.path.basename(args.reference)}" if ref else "")
+    else:
+        title = args.title
+    if title:
+        fig.suptitle(title, fontsize=12)
     fig.align_ylabels(axes)
     fig.tight_layout()
 
