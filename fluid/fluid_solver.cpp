@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -171,8 +172,14 @@ struct FluidSolver::Impl {
   }
 
   /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles.
-  void predict(const Real dt) {
+  void predict(const Real dt, const Real t) {
     const std::size_t n = p.size();
+    Real ramp = 1.0;
+    if (const char* e = std::getenv("MPSFSI_RAMP")) {
+      const Real tr = std::atof(e);
+      if (t < tr) ramp = 0.5 * (1.0 - std::cos(M_PI * t / tr));
+    }
+    const Vec gravity_now = ramp * gravity;
     const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
     for (std::size_t i = 0; i < n; ++i) {
       if (roles[i] != Role::fluid) continue;
@@ -187,7 +194,7 @@ struct FluidSolver::Impl {
           lap += (p.velocity[j] - vi) * (re_l / std::sqrt(r2) - 1.0);
         }
       }
-      p.velocity[i] += dt * (nu * a * lap + gravity);
+      p.velocity[i] += dt * (nu * a * lap + gravity_now);
       p.position[i] += dt * p.velocity[i];
     }
   }
@@ -496,7 +503,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_neighbours += seconds_since(t0);
 
   t0 = Clock::now();
-  m.predict(dt);
+  m.predict(dt, t + dt);
   report.t_rest += seconds_since(t0);
   t0 = Clock::now();
   m.build_near_list();

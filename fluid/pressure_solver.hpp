@@ -10,6 +10,7 @@
 #include <mpi.h>
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,10 +19,24 @@ namespace mpsfsi {
 
 struct PressureSolverSettings {
   std::string solver = "cg";              ///< cg | gmres
-  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | none
+  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | sgs | none
   Real tolerance = 1e-8;                  ///< relative residual ||b - Ax|| / ||b||
   int max_iterations = 500;
-  int muelu_rebuild_every = 10;           ///< MueLu: full hierarchy setup every N solves, reuse between
+  /// Full preconditioner setup every N solves (1: every solve). In between, MueLu and ILU are applied as
+  /// they were built, on an earlier matrix (still a fixed SPD operator: CG stays correct, only the
+  /// iterations grow), and Chebyshev is rebuilt on the new matrix with the last eigenvalue estimate (no
+  /// power iterations). Jacobi and SGS are always rebuilt (their setup is one diagonal extraction).
+  int rebuild_every = 1;
+  /// With rebuild_every > 1: set up again at the next solve when a solve took more than this factor times
+  /// the iterations of the first solve after the last setup (e.g. after the particles were reordered).
+  /// 0: off.
+  Real rebuild_growth = 1.5;
+  /// Old name of rebuild_every for MueLu (the larger of the two is used).
+  int muelu_rebuild_every = 1;
+  /// Expert: extra parameters for the preconditioner's package, by their MueLu / Ifpack2 names, e.g.
+  /// {"relaxation: sweeps", "2"}; values are read as bool, integer, number or string. They override the
+  /// built-in choices.
+  std::map<std::string, std::string> parameters;
 };
 
 /// The rows [begin, end) of a system with n_rows rows that this rank owns.

@@ -1,15 +1,18 @@
 // Trilinos implementation of the pressure solve (seed 004 eq. 23): the only translation unit that
 // includes Tpetra, Belos, MueLu and Ifpack2. The rank's block of rows is turned into a Tpetra::CrsMatrix
-// straight from local CRS arrays (Kokkos views + expertStaticFillComplete, no insertGlobalValues); Belos
-// CG or GMRES with MueLu (coarse solver RELAXATION: the default KLU2 coarse solve is wrong on 2 ranks in
-// this build, see shared/notes/trilinos-on-debian.md; hierarchy reused between full setups) or Ifpack2
-// Chebyshev / ILU(0) (additive Schwarz) / Jacobi; the true residual is checked after every solve and
-// the solution is gathered to every rank.
+// straight from local CRS arrays (Kokkos views + expertStaticFillComplete, no insertGlobalValues; the
+// column map and Import are kept while the set of referenced columns does not change); Belos CG or GMRES
+// with MueLu (coarse solver RELAXATION: the default KLU2 coarse solve is wrong on 2 ranks in this build,
+// see shared/notes/trilinos-on-debian.md) or Ifpack2 Chebyshev / ILU(0) (additive Schwarz) / Jacobi /
+// symmetric Gauss-Seidel. A preconditioner may be kept for several solves (rebuild_every): it is applied
+// as built on its own, earlier matrix, which stays a valid SPD preconditioner of the new one. The true
+// residual is checked after every solve and the solution is gathered to every rank.
 #include "fluid/pressure_solver.hpp"
 
 #include <BelosLinearProblem.hpp>
 #include <BelosSolverFactory.hpp>
 #include <BelosTpetraAdapter.hpp>
+#include <Ifpack2_Chebyshev.hpp>
 #include <Ifpack2_Factory.hpp>
 #include <Kokkos_Core.hpp>
 #include <MueLu_CreateTpetraPreconditioner.hpp>
@@ -55,6 +58,31 @@ void ensure_kokkos() {
   });
 }
 
+/// Sets `key` (a path "list/sublist/name" for sublists) to `text` read as bool, integer, number or string.
+void set_parameter(Teuchos::ParameterList& list, const std::string& key, const std::string& text) {
+  const auto slash = key.find('/');
+  if (slash != std::string::npos) {
+    set_parameter(list.sublist(key.substr(0, slash)), key.substr(slash + 1), text);
+    return;
+  }
+  if (text == "true" || text == "false") {
+    list.set(key, text == "true");
+    return;
+  }
+  char* end = nullptr;
+  const long long i = std::strtoll(text.c_str(), &end, 10);
+  if (!text.empty() && *end == '\0') {
+    list.set(key, static_cast<int>(i));
+    return;
+  }
+  const double d = std::strtod(text.c_str(), &end);
+  if (!text.empty() && *end == '\0') {
+    list.set(key, d);
+    return;
+  }
+  list.set(key, text);
+}
+
 class TrilinosPressureSolver final : public PressureSolver {
  public:
   TrilinosPressureSolver(const PressureSolverSettings& s, MPI_Comm comm) : settings_(s) {
@@ -64,20 +92,34 @@ class TrilinosPressureSolver final : public PressureSolver {
     n_ranks_ = comm_->getSize();
     rank_ = comm_->getRank();
     static const char* solvers[] = {"cg", "gmres"};
-    static const char* precs[] = {"muelu", "chebyshev", "ilu", "jacobi", "none"};
+    static const char* precs[] = {"muelu", "chebyshev", "ilu", "jacobi", "sgs", "none"};
     if (std::find(std::begin(solvers), std::end(solvers), s.solver) == std::end(solvers))
       throw std::invalid_argument("fluid.solver: unknown solver '" + s.solver + "' (expected cg or gmres)");
     if (std::find(std::begin(precs), std::end(precs), s.preconditioner) == std::end(precs))
       throw std::invalid_argument("fluid.preconditioner: unknown preconditioner '" + s.preconditioner +
-                                  "' (expected muelu, chebyshev, ilu, jacobi or none)");
+                                  "' (expected muelu, chebyshev, ilu, jacobi, sgs or none)");
+    rebuild_every_ = std::max(1, s.rebuild_every);
+    if (s.preconditioner == "muelu") rebuild_every_ = std::max(rebuild_every_, s.muelu_rebuild_every);
+    for (const auto& [key, value] : s.parameters) {
+      if (key.rfind("belos: ", 0) == 0)
+        set_parameter(belos_params_, key.substr(7), value);
+      else
+        set_parameter(prec_params_, key, value);
+    }
     auto params = rcp(new Teuchos::ParameterList);
     params->set("Convergence Tolerance", s.tolerance);
     params->set("Maximum Iterations", s.max_iterations);
     params->set("Implicit Residual Scaling", std::string("Norm of RHS"));
     if (s.solver == "gmres") params->set("Explicit Residual Scaling", std::string("Norm of RHS"));
     params->set("Verbosity", 0);
+    std::string manager = s.solver == "cg" ? "PSEUDOBLOCK CG" : "PSEUDOBLOCK GMRES";
+    if (belos_params_.isParameter("manager")) {  // expert: "belos: manager" = a Belos solver name
+      manager = belos_params_.get<std::string>("manager");
+      belos_params_.remove("manager");
+    }
+    params->setParameters(belos_params_);
     Belos::SolverFactory<Scalar, MV, OP> factory;
-    belos_ = factory.create(s.solver == "cg" ? "PSEUDOBLOCK CG" : "PSEUDOBLOCK GMRES", params);
+    belos_ = factory.create(manager, params);
   }
 
   ~TrilinosPressureSolver() override {
@@ -87,6 +129,8 @@ class TrilinosPressureSolver final : public PressureSolver {
     ifpack_ = Teuchos::null;
     A_ = Teuchos::null;
     x_ = b_ = r_ = Teuchos::null;
+    importer_ = Teuchos::null;
+    col_map_ = Teuchos::null;
     row_map_ = Teuchos::null;
     comm_ = Teuchos::null;
     MPI_Comm_free(&raw_comm_);
@@ -147,6 +191,11 @@ class TrilinosPressureSolver final : public PressureSolver {
     belos_->setProblem(problem);
     const Belos::ReturnType ret = belos_->solve();
     result.iterations = belos_->getNumIters();
+    if (solves_since_setup_ == 0) iterations_after_setup_ = result.iterations;
+    ++solves_since_setup_;
+    if (settings_.rebuild_growth > 0 && solves_since_setup_ > 1 &&
+        result.iterations > settings_.rebuild_growth * std::max(iterations_after_setup_, 1))
+      force_setup_ = true;
     // True residual.
     A_->apply(*x_, *r_);
     r_->update(1.0, *b_, -1.0);
@@ -169,8 +218,10 @@ class TrilinosPressureSolver final : public PressureSolver {
       x_ = rcp(new MV(row_map_, 1));
       b_ = rcp(new MV(row_map_, 1));
       r_ = rcp(new MV(row_map_, 1));
-      muelu_ = Teuchos::null;  // the hierarchy belongs to the old map
+      muelu_ = Teuchos::null;  // the preconditioner belongs to the old map
       ifpack_ = Teuchos::null;
+      col_map_ = Teuchos::null;
+      importer_ = Teuchos::null;
       local_of_global_.assign(sys.n_global_rows, -1);
     }
     // Column map: the sorted set of global ids referenced by this rank's rows (sorted, so each row's
@@ -187,9 +238,17 @@ class TrilinosPressureSolver final : public PressureSolver {
       std::sort(col_gids_.begin(), col_gids_.end());
       for (std::size_t k = 0; k < col_gids_.size(); ++k)
         local_of_global_[static_cast<std::size_t>(col_gids_[k])] = static_cast<LO>(k);
-      col_map = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
-                            Teuchos::ArrayView<const GO>(col_gids_.data(), static_cast<int>(col_gids_.size())), 0,
-                            comm_));
+      // A new column map (and Import) only if the set of columns changed on some rank.
+      int changed = col_map_.is_null() || col_gids_ != old_col_gids_ ? 1 : 0;
+      MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_MAX, raw_comm_);
+      if (changed) {
+        col_map_ = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                               Teuchos::ArrayView<const GO>(col_gids_.data(), static_cast<int>(col_gids_.size())), 0,
+                               comm_));
+        importer_ = rcp(new Tpetra::Import<LO, GO, Node>(row_map_, col_map_));
+        old_col_gids_ = col_gids_;
+      }
+      col_map = col_map_;
     }
     using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
     using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
@@ -206,40 +265,44 @@ class TrilinosPressureSolver final : public PressureSolver {
     }
     for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
     A_ = rcp(new Matrix(row_map_, col_map, ptr, ind, val));
-    A_->expertStaticFillComplete(row_map_, row_map_);
+    A_->expertStaticFillComplete(row_map_, row_map_, importer_);
   }
 
+  /// The preconditioner for this solve: a full setup when due, else the kept one.
   RCP<OP> setup_preconditioner() {
     const std::string& p = settings_.preconditioner;
     if (p == "none") return Teuchos::null;
+    const bool due = force_setup_ || solves_since_setup_ >= static_cast<std::size_t>(rebuild_every_) ||
+                     (p == "muelu" ? muelu_.is_null() : ifpack_.is_null());
     if (p == "muelu") {
-      const bool rebuild = muelu_.is_null() || settings_.muelu_rebuild_every <= 1 ||
-                           n_solves_ % static_cast<std::size_t>(settings_.muelu_rebuild_every) == 0;
-      if (rebuild) {
+      if (due) {
         Teuchos::ParameterList params;
         params.set("verbosity", std::string("none"));
         params.set("multigrid algorithm", std::string("sa"));
         params.set("coarse: type", std::string("RELAXATION"));
         params.set("coarse: max size", 64);
         params.set("smoother: type", std::string("CHEBYSHEV"));
-        params.set("reuse: type", std::string("tP"));
+        params.setParameters(prec_params_);
         RCP<OP> A_op = A_;
         muelu_ = MueLu::CreateTpetraPreconditioner(A_op, params);
-      } else {
-        MueLu::ReuseTpetraPreconditioner(A_, *muelu_);
+        mark_setup();
       }
       precond_bytes_ = 2 * A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO));  // rough: P, R, coarse A
       return muelu_;
     }
+    // Jacobi and SGS: always on the new matrix. Chebyshev: on the new matrix, with the kept eigenvalue
+    // estimate between full setups. ILU(0): kept as built.
+    if (p == "ilu" && !due) return ifpack_;
     Teuchos::ParameterList params;
     std::string type;
-    if (p == "jacobi") {
+    if (p == "jacobi" || p == "sgs") {
       type = "RELAXATION";
-      params.set("relaxation: type", std::string("Jacobi"));
+      params.set("relaxation: type", std::string(p == "jacobi" ? "Jacobi" : "Symmetric Gauss-Seidel"));
       params.set("relaxation: sweeps", 1);
     } else if (p == "chebyshev") {
       type = "CHEBYSHEV";
       params.set("chebyshev: degree", 3);
+      if (!due && lambda_max_ > 0) params.set("chebyshev: max eigenvalue", lambda_max_);
     } else {  // ilu: ILU(0) on each rank's block (additive Schwarz, no overlap)
       type = "SCHWARZ";
       params.set("schwarz: overlap level", 0);
@@ -249,13 +312,24 @@ class TrilinosPressureSolver final : public PressureSolver {
       inner.set("fact: iluk level-of-fill", 0);
       params.set("inner preconditioner parameters", inner);
     }
+    params.setParameters(prec_params_);
     Ifpack2::Factory factory;
     ifpack_ = factory.create<Tpetra::RowMatrix<Scalar>>(type, A_);
     ifpack_->setParameters(params);
     ifpack_->initialize();
     ifpack_->compute();
+    if (p == "chebyshev" && (due || lambda_max_ <= 0)) {
+      using Cheb = Ifpack2::Chebyshev<Tpetra::RowMatrix<Scalar>>;
+      if (const auto* cheb = dynamic_cast<const Cheb*>(ifpack_.get())) lambda_max_ = cheb->getLambdaMaxForApply();
+    }
+    if (due) mark_setup();
     precond_bytes_ = p == "ilu" ? A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO)) : 2 * x_->getLocalLength() * sizeof(Scalar);
     return ifpack_;
+  }
+
+  void mark_setup() {
+    solves_since_setup_ = 0;
+    force_setup_ = false;
   }
 
   void gather(const LocalRows& sys, std::vector<Real>& x) {
@@ -291,6 +365,15 @@ class TrilinosPressureSolver final : public PressureSolver {
   RCP<MueLu::TpetraOperator<Scalar, LO, GO, Node>> muelu_;
   RCP<Ifpack2::Preconditioner<Scalar, LO, GO, Node>> ifpack_;
   std::size_t n_solves_ = 0;
+  int rebuild_every_ = 1;
+  std::size_t solves_since_setup_ = 0;
+  int iterations_after_setup_ = 0;
+  bool force_setup_ = false;
+  double lambda_max_ = 0;  ///< Chebyshev: the eigenvalue bound of the last full setup
+  Teuchos::ParameterList prec_params_, belos_params_;
+  RCP<const Map> col_map_;
+  RCP<const Tpetra::Import<LO, GO, Node>> importer_;
+  std::vector<GO> old_col_gids_;
   std::size_t precond_bytes_ = 0;
   std::vector<LO> local_of_global_;
   std::vector<GO> col_gids_;

@@ -767,10 +767,13 @@ void read_fluid_numerics(MapReader r, FluidNumerics& n) {
   n.beta2 = r.number("beta2", n.beta2, in_half_open(0, 1), "a number in (0, 1] (free surface: N_i < beta2 N0)");
   n.gradient = r.choice("gradient", n.gradient, {"min_pressure", "corrected"});
   n.solver = r.choice("solver", n.solver, {"cg", "gmres"});
-  n.preconditioner = r.choice("preconditioner", n.preconditioner, {"muelu", "chebyshev", "ilu", "jacobi", "none"});
+  n.preconditioner = r.choice("preconditioner", n.preconditioner, {"muelu", "chebyshev", "ilu", "jacobi", "sgs", "none"});
   n.tolerance = r.number("tolerance", n.tolerance, in_open(0, 1), "a number in (0, 1) (relative residual of the pressure solve)");
   n.max_iterations = r.integer("max_iterations", n.max_iterations, [](const long long k) { return k >= 1; },
                                "a positive integer (iterations of the pressure solve)");
+  n.preconditioner_rebuild_every =
+      r.integer("preconditioner_rebuild_every", n.preconditioner_rebuild_every, [](const long long k) { return k >= 1; },
+                "a positive integer (full preconditioner setup every N steps)");
   r.finish();
 }
 

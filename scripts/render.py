@@ -176,7 +176,7 @@ def parse_args(argv):
                    help="render N times larger and average down (anti-aliasing; default 3, less for huge images)")
     p.add_argument("--no-dummy", action="store_true", help="do not draw dummy particles")
     p.add_argument("--title", help="title prefix (default: case name); the time is appended")
-    p.add_argument("--bounds", help="view xmin,xmax,ymin,ymax (default: all particles of the first frame)")
+    p.add_argument("--bounds", help="view xmin,xmax,ymin,ymax (default: all particles of the chosen frames)")
     return p.parse_args(argv)
 
 
@@ -319,11 +319,11 @@ def main(argv=None):
                   file=sys.stderr)
         s_name = None
 
-    # View bounds: all particles of the first chosen frame (fixed for a sequence).
+    # View bounds: all particles of all chosen frames (fixed for a sequence).
     if view is None:
-        pts = data[0][0]
-        view = [pts[:, 0].min() - radius, pts[:, 0].max() + radius, pts[:, 1].min() - radius,
-                pts[:, 1].max() + radius]
+        lo = np.min([pts[:, :2].min(axis=0) for pts, _ in data], axis=0) - radius
+        hi = np.max([pts[:, :2].max(axis=0) for pts, _ in data], axis=0) + radius
+        view = [lo[0], hi[0], lo[1], hi[1]]
 
     def make_lut(colors, rng):
         ctf = vtk.vtkColorTransferFunction()

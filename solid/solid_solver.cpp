@@ -619,7 +619,8 @@ SolidDiagnostics SolidSolver::diagnostics() const {
 std::size_t SolidSolver::n_fragments() const { return impl_->n_frag; }
 
 Real SolidSolver::min_distance_between_fragments() const {
-  const Impl& m = *impl_;
+  Impl& m = *impl_;
+  m.compute_fragments();
   NeighbourList nl;
   std::vector<Vec> x(m.n());
   for (std::size_t k = 0; k < m.n(); ++k) x[k] = m.p.position[static_cast<std::size_t>(m.pid[k])];

@@ -59,8 +59,8 @@ class SolidSolver {
   SolidDiagnostics diagnostics() const;
   /// Number of fragments (connected components of intact bonds) at the last prepare_output.
   std::size_t n_fragments() const;
-  /// Smallest distance between two solid particles of different fragments (fragments as at the last
-  /// prepare_output), or +inf. O(N); for tests.
+  /// Smallest distance between two solid particles of different fragments (fragments recomputed
+  /// now), or +inf when none are closer than dp. O(N); for tests.
   Real min_distance_between_fragments() const;
   /// Intact bonds (each pair once).
   std::size_t n_bonds() const;

@@ -184,6 +184,7 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_EQ(c.coupling.subcycles, 1);
   EXPECT_EQ(c.fluid.solver, "cg");
   EXPECT_EQ(c.fluid.preconditioner, "muelu");
+  EXPECT_EQ(c.fluid.preconditioner_rebuild_every, 1);
   EXPECT_DOUBLE_EQ(c.fluid.re_laplacian, 4.0);
   EXPECT_DOUBLE_EQ(c.output.interval, 0.01);
   EXPECT_TRUE(c.output.fields.empty());

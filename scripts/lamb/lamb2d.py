@@ -18,8 +18,7 @@ Conventions (the same for both methods and the CLI):
 * 2D plane strain in (x, y): x horizontal, y vertical *up*, free surface y = 0, medium y < 0.
   Source at (0, -h), receivers at (x, -z_r).  Output: ux (positive +x) and uy (positive *up*).
 * ``explosion``: isotropic line moment M(t) * delta_ij [N*m/m = N] (equivalent body force
-  f = -M grad(delta)); M > 0 pushes the medium outward.  For a pressure-driven cavity of radius a,
-  M = 2*pi*a^2*(lambda+mu)/mu ... is *not* assumed; use M directly.  M(t) = M0 * stf(t).
+  f = -M grad(delta)); M > 0 pushes the medium outward.  M(t) = M0 * stf(t).
 * ``force_y``: line force per unit length F(t) [N/m] in +y (upward), F(t) = F0 * stf(t).
 * ``force_x``: line force per unit length F(t) [N/m] in +x.
 * stf: ``gaussian_derivative`` s(t) = -sqrt(e) * (tau/sigma) * exp(-tau^2/(2 sigma^2)),
@@ -307,6 +306,11 @@ def seismograms_cagniard(medium: Medium, source: str, depth: float, offsets, t, 
     if source == "force_y":
         scale = -scale                   # force up = -(force down)
     n_nodes = int(nodes_per_dt * t[-1] / dt) + 2000
+    # resolve the Rayleigh pulse of the kernel (time width ~ h sqrt(1/c_R^2 - 1/vp^2)) with
+    # >= 20 nodes: node spacing at the end of the path is 2 t_end / n_nodes
+    cr = rayleigh_speed(vp, vs)
+    width = depth * math.sqrt(1.0 / cr**2 - 1.0 / vp**2)
+    n_nodes = int(min(max(n_nodes, 40.0 * t[-1] / width), 4e6))
     offsets = np.atleast_1d(np.asarray(offsets, dtype=float))
     ux = np.zeros((len(offsets), len(t)))
     uz = np.zeros((len(offsets), len(t)))

@@ -1,0 +1,149 @@
+"""Driver of the ctest tests of scripts/plot_probes.py and scripts/render.py (see tests/scripts/CMakeLists.txt)."""
+import os
+import shutil
+import struct
+import subprocess
+import sys
+
+
+def fail(msg):
+    print(f"FAIL: {msg}")
+    sys.exit(1)
+
+
+def run(cmd, env=None):
+    print("+ " + " ".join(cmd), flush=True)
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+    print(r.stdout, end="", flush=True)
+    return r.returncode, r.stdout
+
+
+def png_size(path):
+    if not os.path.isfile(path) or os.path.getsize(path) == 0:
+        fail(f"{path}: missing or empty")
+    with open(path, "rb") as f:
+        head = f.read(24)
+    if head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        fail(f"{path}: not a PNG file")
+    return struct.unpack(">II", head[16:24])
+
+
+def expect_error(cmd, code, words):
+    rc, out = run(cmd)
+    if rc != code:
+        fail(f"exit code {rc}, expected {code}")
+    for w in words:
+        if w not in out:
+            fail(f"message does not name '{w}'")
+
+
+def test_plot(python, script, work):
+    os.makedirs(work, exist_ok=True)
+    probes = os.path.join(work, "probes.csv")
+    ref = os.path.join(work, "reference.tsv")
+    with open(probes, "w") as f:
+        f.write("time,front,height,p_bottom_right\n")
+        for i in range(81):
+            t = 0.005 * i
+            f.write(f"{t:.9g},{0.146 + 0.9 * t * t:.9g},{0.292 - 0.5 * t * t:.9g},{2800 - 1500 * t:.9g}\n")
+    with open(ref, "w") as f:
+        f.write("# synthetic reference: Z = x/L against T = t sqrt(2g/L)\n# second comment line\n")
+        f.write("T\tZ\n1.0\t1.3\n2.0\t2.2\n3.0\t3.4\n")
+    out = os.path.join(work, "probes_vs_reference.png")
+    if os.path.exists(out):
+        os.remove(out)
+    rc, _ = run([python, script, probes, "--output", out, "--reference", ref, "--ref-columns", "T,Z",
+                 "--x-expr", "time*sqrt(2*g/L)", "--y-expr", "y/L", "--const", "L=0.146", "g=9.81",
+                 "--ref-target", "front"])
+    if rc != 0:
+        fail(f"plot_probes.py exited {rc}")
+    w, h = png_size(out)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    img = plt.imread(out)
+    if img.shape[0] != h or img.shape[1] != w:
+        fail(f"{out}: decoded size {img.shape} differs from the header {w}x{h}")
+    dark = (img[:, :, :3].sum(axis=2) < 1.5).mean()
+    if dark < 0.002:
+        fail(f"{out}: the picture is (almost) blank ({dark:.4%} dark pixels)")
+    print(f"{out}: {w}x{h} PNG, {dark:.2%} dark pixels")
+    out2 = os.path.join(work, "all_columns.png")
+    rc, _ = run([python, script, probes, "--output", out2])
+    if rc != 0:
+        fail(f"plot_probes.py exited {rc}")
+    png_size(out2)
+
+    missing = os.path.join(work, "no_such_probes.csv")
+    expect_error([python, script, missing, "--output", out2], 2, ["no_such_probes.csv"])
+    expect_error([python, script, probes, "--columns", "front,bogus_column", "--output", out2], 2, ["bogus_column"])
+    expect_error([python, script, probes, "--reference", ref, "--ref-columns", "T,nosuch", "--output", out2], 2,
+                 ["nosuch", "reference.tsv"])
+    expect_error([python, script, probes, "--reference", os.path.join(work, "no_ref.tsv"), "--output", out2], 2,
+                 ["no_ref.tsv"])
+    expect_error([python, script, probes, "--y-expr", "__import__('os')", "--output", out2], 2, ["not allowed"])
+    print("OK")
+
+
+def test_render(python, script, mpsfsi, case, work):
+    if os.path.exists(work):
+        shutil.rmtree(work)
+    # A real (short) run: the last frame has pressures.
+    rc, _ = run([mpsfsi, "run", case, "--end-time", "0.04", "--quiet", "--output", work])
+    if rc != 0:
+        fail(f"mpsfsi run exited {rc}")
+    pvd = os.path.join(work, "particles.pvd")
+    out = os.path.join(work, "frame0.png")
+    rc, _ = run([python, script, "--pvd", pvd, "--frames", "-1", "--output", out, "--size", "640x480"])
+    if rc == 77:
+        print("SKIP: render.py found no X display and no xvfb-run (install Debian's xvfb and xauth)")
+        sys.exit(77)
+    if rc != 0:
+        fail(f"render.py exited {rc}")
+    w, h = png_size(out)
+    if (w, h) != (640, 480):
+        fail(f"{out}: size {w}x{h}, expected 640x480")
+    import numpy as np
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+    reader = vtk.vtkPNGReader()
+    reader.SetFileName(out)
+    reader.Update()
+    img = vtk_to_numpy(reader.GetOutput().GetPointData().GetScalars()).astype(int)[:, :3]
+    background = (img >= 250).all(axis=1)
+    share = 1.0 - background.mean()
+    blue = ((img[:, 2] - img[:, 0]) > 60).mean()   # fluid particles (plain blue without a pressure field)
+    grey = ((abs(img[:, 0] - img[:, 2]) < 8) & (img[:, 0] < 235) & (img[:, 0] > 60)).mean()  # walls
+    print(f"{out}: {w}x{h} PNG, {share:.2%} non-background, {blue:.2%} blue, {grey:.2%} grey pixels")
+    if share < 0.02 or blue < 0.01 or grey < 0.002:
+        fail(f"{out}: too few particle pixels")
+    expect_error([python, script, "--pvd", os.path.join(work, "none.pvd"), "--output", out], 2, ["none.pvd"])
+    expect_error([python, script, "--pvd", pvd, "--frames", "5", "--output", out], 2, ["frame 5"])
+    print("OK")
+
+
+def test_render_no_display(python, script, work):
+    os.makedirs(work, exist_ok=True)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["PATH"] = os.path.join(work, "empty_path")  # no xvfb-run to be found
+    pvd = os.path.join(work, "one.pvd")
+    with open(pvd, "w") as f:
+        f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n'
+                '<DataSet timestep="0" file="one_000000.vtu"/></Collection></VTKFile>\n')
+    open(os.path.join(work, "one_000000.vtu"), "w").close()
+    rc, out = run([python, script, "--pvd", pvd, "--output", os.path.join(work, "x.png")], env=env)
+    if rc != 77 or "xvfb-run" not in out:
+        fail(f"exit code {rc}, expected 77 and a message naming xvfb-run")
+    print("OK")
+
+
+if __name__ == "__main__":
+    what = sys.argv[1]
+    if what == "plot":
+        test_plot(*sys.argv[2:5])
+    elif what == "render":
+        test_render(*sys.argv[2:7])
+    elif what == "render-no-display":
+        test_render_no_display(*sys.argv[2:5])
+    else:
+        fail(f"unknown test {what}")
