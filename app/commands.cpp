@@ -70,9 +70,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
                scene.particles.size(), spec.time.end, out);
   try {
     const RunSummary s = run_case(spec, std::move(scene), settings, MPI_COMM_WORLD);
-    if (rank == 0)
-      fmt::print("done: {} steps to t = {:.6g} s in {:.2f} s wall (fluid {:.2f} s, solid {:.2f} s, output {:.2f} s); series {}\n",
-                 s.n_steps, s.end_time, s.wall_seconds, s.t_fluid, s.t_solid, s.t_output, s.pvd_path);
+    if (rank == 0) fmt::print("{}\n", format_summary(s));
   } catch (const RunFailure& e) {
     fmt::print(stderr, "mpsfsi: run stopped: {}\n", e.what());
     return 3;

@@ -1,4 +1,5 @@
-// The run loop: fluid step, solid sub-steps, state checks, frames and probes.
+// The run loop: fluid step, solid sub-steps, state checks (non-finite or runaway velocity, solid leaving
+// the domain), frames and probes, progress line and JSON-lines run log.
 #include "coupling/simulation.hpp"
 
 #include "fluid/fluid_solver.hpp"
@@ -8,8 +9,13 @@
 
 #include <fmt/format.h>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <memory>
 
 namespace mpsfsi {
@@ -17,20 +23,251 @@ namespace mpsfsi {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(const Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
+double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+long peak_memory_kib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss;
 }
 
-/// Throws RunFailure naming the first particle with a non-finite position or velocity.
-void check_finite(const ParticleSet& p, const std::size_t step, const Real t) {
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.position[i].allFinite() && p.velocity[i].allFinite()) continue;
-    throw RunFailure(fmt::format(
-        "step {} (t = {:.6g} s): particle {} ({} of body '{}') has a non-finite position or velocity; "
-        "the run went unstable (reduce dt or the CFL number)",
-        step, t, p.global_id[i], to_string(p.kind[i]), p.bodies[p.body[i]].name));
-  }
+std::string format_duration(const double s) {
+  if (!std::isfinite(s) || s < 0) return "?";
+  const auto t = static_cast<long>(s + 0.5);
+  if (t >= 3600) return fmt::format("{}h{:02d}m", t / 3600, static_cast<int>((t % 3600) / 60));
+  if (t >= 60) return fmt::format("{}m{:02d}s", t / 60, static_cast<int>(t % 60));
+  return fmt::format("{}s", t);
 }
+
+/// Speed above which a particle counts as runaway: the fluid's sound speed c (the weakly compressible
+/// model is meaningless beyond Mach 1) and the solid's P-wave speed (particle speed = wave speed means
+/// strains of order one).
+struct SpeedLimits {
+  Real fluid = 0;
+  std::vector<Real> solid;  ///< per solid material
+
+  explicit SpeedLimits(const CaseSpec& spec) {
+    for (const auto& m : spec.fluid_materials) fluid = std::max(fluid, m.c);
+    for (const auto& m : spec.solid_materials) {
+      const Real lambda = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu));
+      const Real mu = m.E / (2 * (1 + m.nu));
+      solid.push_back(std::sqrt((lambda + 2 * mu) / m.rho));
+    }
+  }
+};
+
+/// Everything a run needs between steps.
+class RunLoop {
+ public:
+  RunLoop(const CaseSpec& spec, Scene& scene, const RunSettings& settings, MPI_Comm comm)
+      : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec),
+        writer_(settings.output_dir, "particles"),
+        probes_(spec, scene.particles, settings.output_dir + "/probes.csv") {
+    MPI_Comm_rank(comm, &rank_);
+    log_ = rank_ == 0 && !settings.quiet;
+    tty_ = log_ && isatty(fileno(stdout));
+    if (p_.n_of_kind(ParticleKind::fluid) > 0) fluid_ = std::make_unique<FluidSolver>(spec, p_, comm);
+    if (p_.n_of_kind(ParticleKind::solid) > 0) solid_ = std::make_unique<SolidSolver>(spec, p_);
+    writer_.set_fields(spec.output.fields);
+    summary_.pvd_path = writer_.pvd_path();
+    if (rank_ == 0) {
+      jsonl_.open(settings.output_dir + "/run.jsonl");
+      if (!jsonl_) throw std::runtime_error("cannot write " + settings.output_dir + "/run.jsonl");
+    }
+  }
+
+  RunSummary run() {
+    const auto t_start = Clock::now();
+    write_output();
+    Real next_output = spec_.output.interval;
+    const Real eps = 1e-12 * std::max<Real>(1, spec_.time.end);
+    while (t_ < spec_.time.end - eps) {
+      last_good_ = p_;  // the frame written if this step fails
+      step();
+      report_progress(t_start, false);
+      if (t_ >= next_output - eps) {
+        write_output();
+        while (next_output <= t_ + eps) next_output += spec_.output.interval;
+      }
+    }
+    report_progress(t_start, true);
+    summary_.n_steps = step_;
+    summary_.end_time = t_;
+    summary_.wall_seconds = seconds_since(t_start);
+    summary_.peak_memory_kib = peak_memory_kib();
+    if (rank_ == 0)
+      jsonl_ << fmt::format(
+          "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
+          "\"output\":{:.3f},\"removed\":{},\"peak_memory_kib\":{}}}\n",
+          step_, t_, summary_.wall_seconds, summary_.t_fluid, summary_.t_solid, summary_.t_output,
+          summary_.n_removed, summary_.peak_memory_kib);
+    return summary_;
+  }
+
+ private:
+  void step() {
+    std::string limit = "fixed";
+    Real dt = 0;
+    if (fluid_) {
+      dt = fluid_->stable_dt(&limit);
+    } else {
+      dt = spec_.solid.dt ? *spec_.solid.dt : solid_->stable_dt();
+      limit = spec_.solid.dt ? "fixed" : "solid stability";
+    }
+    dt = std::min(dt, spec_.time.end - t_);
+    int n_sub = 1;
+    if (fluid_ && solid_) n_sub = resolve_subcycles(spec_.coupling.subcycles, dt, solid_->stable_dt());
+    try {
+      if (fluid_) {
+        const auto t0 = Clock::now();
+        last_fluid_ = fluid_->advance(t_, dt);
+        summary_.t_fluid += seconds_since(t0);
+        summary_.n_removed += last_fluid_.n_removed;
+        if (last_fluid_.n_removed > 0 && log_)
+          fmt::print("{}step {}: {} fluid particle(s) left the domain and were removed ({} so far)\n", tty_ ? "\n" : "",
+                     step_ + 1, last_fluid_.n_removed, summary_.n_removed);
+      }
+      if (solid_) {
+        const auto t0 = Clock::now();
+        const Real dts = dt / n_sub;
+        for (int k = 0; k < n_sub; ++k) solid_->advance(t_ + k * dts, dts);
+        summary_.t_solid += seconds_since(t0);
+      }
+      check_state(step_ + 1, t_ + dt);
+    } catch (const RunFailure& e) {
+      fail(e.what());
+    } catch (const std::exception& e) {
+      fail(fmt::format("step {} (t = {:.6g} s): {}", step_ + 1, t_, e.what()));
+    }
+    t_ += dt;
+    ++step_;
+    dt_ = dt;
+    limit_ = limit;
+    summary_.last_subcycles = n_sub;
+    summary_.last_solid_dt = dt / n_sub;
+  }
+
+  /// Non-finite state, runaway speed, solid particles leaving the domain: the first offender is named.
+  void check_state(const std::size_t step, const Real t) const {
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+      const auto where = [&] {
+        return fmt::format("particle {} ({} of body '{}') at ({:.6g}, {:.6g})", p_.global_id[i], to_string(p_.kind[i]),
+                           p_.bodies[p_.body[i]].name, p_.position[i][0], p_.position[i][1]);
+      };
+      if (!p_.position[i].allFinite() || !p_.velocity[i].allFinite())
+        throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} has a non-finite position or velocity; the run went "
+                                     "unstable (reduce dt or the CFL number)",
+                                     step, t, where()));
+      const Real speed = p_.velocity[i].norm();
+      if (p_.kind[i] == ParticleKind::fluid && limits_.fluid > 0 && speed > limits_.fluid)
+        throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} moves at {:.4g} m/s, faster than the fluid's sound "
+                                     "speed c = {:.4g} m/s: runaway velocity (reduce dt or the CFL number, or raise c)",
+                                     step, t, where(), speed, limits_.fluid));
+      if (p_.kind[i] == ParticleKind::solid) {
+        const auto m = static_cast<std::size_t>(p_.material[i]);
+        if (m < limits_.solid.size() && speed > limits_.solid[m])
+          throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} moves at {:.4g} m/s, faster than the P-wave speed "
+                                       "{:.4g} m/s of its material: runaway velocity (reduce the solid dt)",
+                                       step, t, where(), speed, limits_.solid[m]));
+        if (!spec_.domain.contains(p_.position[i]))
+          throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} left the domain [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}]",
+                                       step, t, where(), spec_.domain.lo[0], spec_.domain.hi[0], spec_.domain.lo[1],
+                                       spec_.domain.hi[1]));
+      }
+    }
+  }
+
+  /// Write the last good state as a frame, log the diagnosis, and throw.
+  [[noreturn]] void fail(const std::string& diagnosis) {
+    std::string frame;
+    if (rank_ == 0) {
+      try {
+        frame = writer_.write(last_good_, t_);
+      } catch (const std::exception& e) {
+        frame = std::string("(could not be written: ") + e.what() + ")";
+      }
+      jsonl_ << fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}\n", step_ + 1, t_,
+                            json_escape(diagnosis));
+      jsonl_.flush();
+    }
+    if (tty_) fmt::print("\n");
+    throw RunFailure(fmt::format("{}\nlast good frame (t = {:.6g} s): {}", diagnosis, t_, frame));
+  }
+
+  void write_output() {
+    const auto t0 = Clock::now();
+    if (solid_) solid_->prepare_output(t_);
+    if (rank_ == 0) {
+      writer_.write(p_, t_);
+      probes_.record(t_, p_);
+    }
+    summary_.t_output += seconds_since(t0);
+  }
+
+  void report_progress(const Clock::time_point t_start, const bool final) {
+    if (rank_ != 0) return;
+    const bool periodic = step_ % static_cast<std::size_t>(std::max(1, settings_.log_every)) == 0 || step_ == 1;
+    const double wall = seconds_since(t_start);
+    const double rate = wall > 0 ? static_cast<double>(step_) / wall : 0;
+    const double frac = spec_.time.end > 0 ? t_ / spec_.time.end : 1;
+    const double eta = frac > 0 ? wall * (1 - frac) / frac : -1;
+    std::string ppe, sub;
+    if (fluid_) ppe = fmt::format(", PPE {} it (res {:.1e})", last_fluid_.iterations, last_fluid_.residual);
+    if (fluid_ && solid_)
+      sub = fmt::format(", subcycles {} (solid dt {:.2e} s)", summary_.last_subcycles, summary_.last_solid_dt);
+    const std::string line = fmt::format("t = {:.5f} s ({:5.1f} %), step {}, {:.1f} steps/s, ETA {}, dt {:.2e} s ({}){}{}",
+                                         t_, 100 * frac, step_, rate, format_duration(eta), dt_, limit_, ppe, sub);
+    if (periodic || final) {
+      jsonl_ << fmt::format(
+          "{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\",\"ppe_iterations\":{},"
+          "\"ppe_residual\":{:.3g},\"subcycles\":{},\"wall\":{:.3f}}}\n",
+          step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.residual, summary_.last_subcycles, wall);
+    }
+    if (!log_) return;
+    if (tty_) {
+      if (final || seconds_since(last_tty_) > 0.2) {
+        fmt::print("\r{:<120}", line);
+        if (final) fmt::print("\n");
+        std::fflush(stdout);
+        last_tty_ = Clock::now();
+      }
+    } else if (periodic || final) {
+      fmt::print("{}\n", line);
+    }
+  }
+
+  static std::string json_escape(const std::string& s) {
+    std::string out;
+    for (const char c : s) {
+      if (c == '"' || c == '\\') out += '\\';
+      if (c == '\n') {
+        out += "\\n";
+        continue;
+      }
+      out += c;
+    }
+    return out;
+  }
+
+  const CaseSpec& spec_;
+  ParticleSet& p_;
+  const RunSettings& settings_;
+  const SpeedLimits limits_;
+  VtkSeriesWriter writer_;
+  ProbeWriter probes_;
+  std::unique_ptr<FluidSolver> fluid_;
+  std::unique_ptr<SolidSolver> solid_;
+  std::ofstream jsonl_;
+  int rank_ = 0;
+  bool log_ = false, tty_ = false;
+  Clock::time_point last_tty_{};
+  ParticleSet last_good_;
+  FluidStepReport last_fluid_;
+  RunSummary summary_;
+  Real t_ = 0, dt_ = 0;
+  std::string limit_ = "-";
+  std::size_t step_ = 0;
+};
 
 }  // namespace
 
@@ -40,90 +277,23 @@ int resolve_subcycles(const int requested, const Real dt_fluid, const Real dt_so
 }
 
 RunSummary run_case(const CaseSpec& spec, Scene scene, const RunSettings& settings, MPI_Comm comm) {
-  const auto t_start = Clock::now();
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  const bool log = rank == 0 && !settings.quiet;
-  ParticleSet& p = scene.particles;
-  const bool has_fluid = p.n_of_kind(ParticleKind::fluid) > 0;
-  const bool has_solid = p.n_of_kind(ParticleKind::solid) > 0;
+  RunLoop loop(spec, scene, settings, comm);
+  return loop.run();
+}
 
-  std::unique_ptr<FluidSolver> fluid;
-  std::unique_ptr<SolidSolver> solid;
-  if (has_fluid) fluid = std::make_unique<FluidSolver>(spec, p, comm);
-  if (has_solid) solid = std::make_unique<SolidSolver>(spec, p);
-  if (solid && rank == 0) solid->set_output_directory(settings.output_dir);  // fragments.csv
-
-  RunSummary summary;
-  VtkSeriesWriter writer(settings.output_dir, "particles");
-  writer.set_fields(spec.output.fields);
-  ProbeWriter probes(spec, p, settings.output_dir + "/probes.csv");
-  summary.pvd_path = writer.pvd_path();
-
-  const auto write_output = [&](const Real t) {
-    const auto t0 = Clock::now();
-    if (solid) solid->prepare_output(t);
-    if (rank == 0) {
-      writer.write(p, t);
-      probes.record(t, p);
-    }
-    summary.t_output += seconds_since(t0);
-  };
-
-  Real t = 0;
-  std::size_t step = 0;
-  write_output(t);
-  Real next_output = spec.output.interval;
-  const Real eps = 1e-12 * std::max<Real>(1, spec.time.end);
-  while (t < spec.time.end - eps) {
-    std::string limit = "fixed";
-    Real dt = 0;
-    if (fluid) {
-      dt = fluid->stable_dt(&limit);
-    } else {
-      dt = spec.solid.dt ? *spec.solid.dt : solid->stable_dt();
-      limit = spec.solid.dt ? "fixed" : "solid stability";
-    }
-    dt = std::min(dt, spec.time.end - t);
-    int n_sub = 1;
-    if (fluid && solid) n_sub = resolve_subcycles(spec.coupling.subcycles, dt, solid->stable_dt());
-
-    FluidStepReport fr;
-    try {
-      if (fluid) {
-        const auto t0 = Clock::now();
-        fr = fluid->advance(t, dt);
-        summary.t_fluid += seconds_since(t0);
-      }
-      if (solid) {
-        const auto t0 = Clock::now();
-        const Real dts = dt / n_sub;
-        for (int k = 0; k < n_sub; ++k) solid->advance(t + k * dts, dts);
-        summary.t_solid += seconds_since(t0);
-      }
-      check_finite(p, step + 1, t + dt);
-    } catch (const RunFailure&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw RunFailure(fmt::format("step {} (t = {:.6g} s): {}", step + 1, t, e.what()));
-    }
-    t += dt;
-    ++step;
-    if (log && (step % static_cast<std::size_t>(settings.log_every) == 0 || step == 1)) {
-      fmt::print("step {:>7}  t = {:.6f} s  dt = {:.3e} s ({})", step, t, dt, limit);
-      if (fluid) fmt::print("  PPE {} it, res {:.2e}", fr.iterations, fr.residual);
-      if (fluid && solid) fmt::print("  subcycles {} (solid dt {:.3e} s)", n_sub, dt / n_sub);
-      fmt::print("\n");
-    }
-    if (t >= next_output - eps) {
-      write_output(t);
-      while (next_output <= t + eps) next_output += spec.output.interval;
-    }
-  }
-  summary.n_steps = step;
-  summary.end_time = t;
-  summary.wall_seconds = seconds_since(t_start);
-  return summary;
+std::string format_summary(const RunSummary& s) {
+  const double other = std::max(0.0, s.wall_seconds - s.t_fluid - s.t_solid - s.t_output);
+  std::string text = fmt::format(
+      "run summary: {} steps to t = {:.6g} s in {} wall ({:.3f} s)\n"
+      "  fluid {:.2f} s ({:.0f} %), solid {:.2f} s ({:.0f} %), output {:.2f} s ({:.0f} %), other {:.2f} s\n"
+      "  peak memory {:.1f} MiB",
+      s.n_steps, s.end_time, format_duration(s.wall_seconds), s.wall_seconds, s.t_fluid,
+      100 * s.t_fluid / std::max(1e-12, s.wall_seconds), s.t_solid, 100 * s.t_solid / std::max(1e-12, s.wall_seconds),
+      s.t_output, 100 * s.t_output / std::max(1e-12, s.wall_seconds), other, static_cast<double>(s.peak_memory_kib) / 1024);
+  if (s.last_subcycles > 1) text += fmt::format("\n  subcycles {} (solid dt {:.3e} s)", s.last_subcycles, s.last_solid_dt);
+  if (s.n_removed > 0) text += fmt::format("\n  {} fluid particles left the domain and were removed", s.n_removed);
+  text += "\n  series " + s.pvd_path;
+  return text;
 }
 
 }  // namespace mpsfsi

@@ -1,6 +1,8 @@
 // The run loop (preCICE-style participant loop): per step the driver takes the fluid's stable dt,
 // advances the fluid, advances the solid by N sub-steps of dt/N, checks the state, and writes frames
-// and probes at the output interval. Only this folder sees both the fluid and the solid.
+// and probes at the output interval. It also reports progress (an updating line on a terminal, plain
+// lines otherwise), writes a JSON-lines run log, and stops with a diagnosis (and the last good frame)
+// when the state becomes invalid. Only this folder sees both the fluid and the solid.
 #pragma once
 
 #include "io/case.hpp"
@@ -8,6 +10,7 @@
 
 #include <mpi.h>
 
+#include <stdexcept>
 #include <string>
 
 namespace mpsfsi {
@@ -15,7 +18,7 @@ namespace mpsfsi {
 struct RunSettings {
   std::string output_dir;
   bool quiet = false;
-  int log_every = 100;   ///< steps between log lines
+  int log_every = 100;          ///< steps between plain log lines (when stdout is not a terminal)
 };
 
 struct RunSummary {
@@ -23,6 +26,10 @@ struct RunSummary {
   Real end_time = 0;
   double wall_seconds = 0;
   double t_fluid = 0, t_solid = 0, t_output = 0;
+  std::size_t n_removed = 0;    ///< fluid particles removed because they left the domain
+  long peak_memory_kib = 0;     ///< peak resident memory of the process
+  int last_subcycles = 1;
+  Real last_solid_dt = 0;
   std::string pvd_path;
 };
 
@@ -38,5 +45,8 @@ RunSummary run_case(const CaseSpec& spec, Scene scene, const RunSettings& settin
 
 /// Sub-steps per fluid step: the case's value, or (auto, 0) the smallest N with dt_fluid / N <= dt_solid.
 int resolve_subcycles(int requested, Real dt_fluid, Real dt_solid);
+
+/// Text of a run summary (wall time, steps, split by phase, peak memory).
+std::string format_summary(const RunSummary& s);
 
 }  // namespace mpsfsi

@@ -26,3 +26,16 @@ mpsfsi_cli_test(missing_case_file 2 "nonexistent.yaml" check nonexistent.yaml)
 mpsfsi_cli_test(no_subcommand 2 "subcommand")
 mpsfsi_cli_test(help 0 "run.*check" --help)
 mpsfsi_cli_test(version 0 "mpsfsi [0-9]+\\.[0-9]+\\.[0-9]+" --version)
+
+# Failure handling (issue 7): each kind is provoked and must give its diagnosis and a non-zero exit.
+set(db ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml)
+set(run_dir ${CMAKE_CURRENT_BINARY_DIR}/cli_runs)
+mpsfsi_cli_test(fail_runaway 3 "moves at .* m/s, faster than the fluid's sound speed.*last good frame"
+  run ${db} --quiet --overwrite --output ${run_dir}/runaway --end-time 0.2 --set time.cfl=~ --set time.dt_max=~ --set time.dt=0.01)
+mpsfsi_cli_test(fail_ppe_not_converged 3 "pressure solve did not converge: 2 iterations.*last good frame"
+  run ${db} --quiet --overwrite --output ${run_dir}/ppe --end-time 0.01 --set fluid.max_iterations=2)
+mpsfsi_cli_test(fluid_leaves_domain 0 "fluid particles left the domain and were removed"
+  run ${PROJECT_SOURCE_DIR}/cases/hydrostatic.yaml --quiet --overwrite --output ${run_dir}/leave --end-time 0.35
+  --set gravity=[0,9.81] --set "domain={min: [-0.05, -0.05], max: [0.25, 0.32]}")
+mpsfsi_cli_test(existing_output_refused 2 "exists and is not empty.*--overwrite"
+  run ${db} --quiet --output ${PROJECT_SOURCE_DIR}/cases --end-time 0.01)
