@@ -172,14 +172,8 @@ struct FluidSolver::Impl {
   }
 
   /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles.
-  void predict(const Real dt, const Real t) {
+  void predict(const Real dt) {
     const std::size_t n = p.size();
-    Real ramp = 1.0;
-    if (const char* e = std::getenv("MPSFSI_RAMP")) {
-      const Real tr = std::atof(e);
-      if (t < tr) ramp = 0.5 * (1.0 - std::cos(M_PI * t / tr));
-    }
-    const Vec gravity_now = ramp * gravity;
     const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
     for (std::size_t i = 0; i < n; ++i) {
       if (roles[i] != Role::fluid) continue;
@@ -194,7 +188,7 @@ struct FluidSolver::Impl {
           lap += (p.velocity[j] - vi) * (re_l / std::sqrt(r2) - 1.0);
         }
       }
-      p.velocity[i] += dt * (nu * a * lap + gravity_now);
+      p.velocity[i] += dt * (nu * a * lap + gravity);
       p.position[i] += dt * p.velocity[i];
     }
   }
@@ -493,7 +487,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   const auto t_begin = t0;
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
   if (m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0)
-    m.p.reorder(cell_order(m.p.position, m.r_max));
+    m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
   m.classify();
   m.move_walls(t + dt);
   report.t_rest += seconds_since(t0);
@@ -503,7 +497,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_neighbours += seconds_since(t0);
 
   t0 = Clock::now();
-  m.predict(dt, t + dt);
+  m.predict(dt);
   report.t_rest += seconds_since(t0);
   t0 = Clock::now();
   m.build_near_list();

@@ -642,8 +642,25 @@ bool inside_box(const Rect& r, const WallSpec& box) {
   return inside(r, bound);
 }
 
+/// The part of a body that is not clamped: a clamp that spans the body's whole width (height) cuts its
+/// height (width); otherwise the whole body counts. Only this part must stay clear of the walls, so a
+/// clamped end may be embedded in a wall (the wall particles there give way, see io/scene.cpp).
+Rect free_part(const BodySpec& b) {
+  Rect r = b.rect;
+  if (!b.clamp) return r;
+  const Rect& c = *b.clamp;
+  for (int a = 0; a < 2; ++a) {
+    const int o = 1 - a;  // the clamp spans axis o fully and cuts along axis a
+    if (c.lo[o] > r.lo[o] || c.hi[o] < r.hi[o]) continue;
+    if (c.lo[a] <= r.lo[a] && c.hi[a] < r.hi[a]) r.lo[a] = std::max(r.lo[a], c.hi[a]);
+    else if (c.hi[a] >= r.hi[a] && c.lo[a] > r.lo[a]) r.hi[a] = std::min(r.hi[a], c.lo[a]);
+  }
+  return r;
+}
+
 /// Every rectangle is inside the domain and at least one particle (dp/2) thick; bodies do not overlap
-/// each other or a block and lie in a box when there is one; clamps touch their body.
+/// each other or a block and lie in a box when there is one (a clamped end may reach into a wall);
+/// clamps touch their body.
 void check_geometry(const Source& src, const CaseSpec& spec, const GeometryFields& g, const Field& dp_field) {
   const auto check_size = [&](const Rect& r, const Field& f) {
     const Vec size = r.size();
@@ -678,11 +695,11 @@ void check_geometry(const Source& src, const CaseSpec& spec, const GeometryField
     bool in_a_box = false;
     for (std::size_t k = 0; k < spec.walls.size(); ++k) {
       const WallSpec& w = spec.walls[k];
-      if (w.type == WallType::block && overlaps(b.rect, w.rect))
+      if (w.type == WallType::block && overlaps(free_part(b), w.rect))
         src.fail(f, fmt::format("{} overlaps {} ('{}'): bodies must not overlap walls", f.path, g.wall_rect[k].path, w.name));
       if (w.type == WallType::box) {
         if (!first_box) first_box = &w;
-        in_a_box = in_a_box || inside_box(b.rect, w);
+        in_a_box = in_a_box || inside_box(free_part(b), w);
       }
     }
     if (first_box && !in_a_box) {
@@ -767,7 +784,7 @@ void read_fluid_numerics(MapReader r, FluidNumerics& n) {
   n.beta2 = r.number("beta2", n.beta2, in_half_open(0, 1), "a number in (0, 1] (free surface: N_i < beta2 N0)");
   n.gradient = r.choice("gradient", n.gradient, {"min_pressure", "corrected"});
   n.solver = r.choice("solver", n.solver, {"cg", "gmres"});
-  n.preconditioner = r.choice("preconditioner", n.preconditioner, {"muelu", "chebyshev", "ilu", "jacobi", "sgs", "none"});
+  n.preconditioner = r.choice("preconditioner", n.preconditioner, {"muelu", "chebyshev", "ilu", "jacobi", "sgs", "ssor", "none"});
   n.tolerance = r.number("tolerance", n.tolerance, in_open(0, 1), "a number in (0, 1) (relative residual of the pressure solve)");
   n.max_iterations = r.integer("max_iterations", n.max_iterations, [](const long long k) { return k >= 1; },
                                "a positive integer (iterations of the pressure solve)");

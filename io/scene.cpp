@@ -36,12 +36,26 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   scene.counts.push_back(count);
 }
 
+/// Wall particles give way to clamped solid particles embedded in the wall (a plate clamped into the
+/// floor): a wall point closer than dp/2 to a clamped particle is left out.
+bool taken_by_clamp(const ParticleSet& p, const std::vector<LocalIndex>& clamped, const Vec& x, const Real dp) {
+  for (const auto i : clamped)
+    if ((p.position[static_cast<std::size_t>(i)] - x).squaredNorm() < 0.25 * dp * dp) return true;
+  return false;
+}
+
 void add_wall(const CaseSpec& spec, const WallSpec& w, Scene& scene) {
   auto& p = scene.particles;
   const int body_index = static_cast<int>(p.bodies.size());
   p.bodies.push_back({w.name, ParticleKind::wall, -1});
-  const auto points = w.type == WallType::box ? box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top)
-                                              : block_walls(w.rect.lo, w.rect.hi, spec.dp);
+  const auto all_points = w.type == WallType::box ? box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top)
+                                                  : block_walls(w.rect.lo, w.rect.hi, spec.dp);
+  std::vector<LocalIndex> clamped;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.clamped[i]) clamped.push_back(static_cast<LocalIndex>(i));
+  std::vector<WallPoint> points;
+  for (const auto& pt : all_points)
+    if (clamped.empty() || !taken_by_clamp(p, clamped, pt.x, spec.dp)) points.push_back(pt);
   BodyCount count{w.name, "wall", points.size(), 0, 0, 0};
   for (const auto& pt : points) {
     p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
