@@ -68,6 +68,7 @@ class RunLoop {
     tty_ = log_ && isatty(fileno(stdout));
     if (p_.n_of_kind(ParticleKind::fluid) > 0) fluid_ = std::make_unique<FluidSolver>(spec, p_, comm);
     if (p_.n_of_kind(ParticleKind::solid) > 0) solid_ = std::make_unique<SolidSolver>(spec, p_);
+    if (solid_ && rank_ == 0) solid_->set_output_directory(settings.output_dir);  // fragments.csv
     writer_.set_fields(spec.output.fields);
     summary_.pvd_path = writer_.pvd_path();
     if (rank_ == 0) {

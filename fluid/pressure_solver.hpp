@@ -19,13 +19,16 @@ namespace mpsfsi {
 
 struct PressureSolverSettings {
   std::string solver = "cg";              ///< cg | gmres
-  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | sgs | none
+  /// muelu | chebyshev | ilu | jacobi | sgs | ssor | none. sgs and ssor (symmetric Gauss-Seidel with
+  /// relaxation 1 and 1.4) run CG on the split-preconditioned system by Eisenstat's trick (one pass over
+  /// the matrix per iteration), on each rank's block.
+  std::string preconditioner = "muelu";
   Real tolerance = 1e-8;                  ///< relative residual ||b - Ax|| / ||b||
   int max_iterations = 500;
   /// Full preconditioner setup every N solves (1: every solve). In between, MueLu and ILU are applied as
   /// they were built, on an earlier matrix (still a fixed SPD operator: CG stays correct, only the
   /// iterations grow), and Chebyshev is rebuilt on the new matrix with the last eigenvalue estimate (no
-  /// power iterations). Jacobi and SGS are always rebuilt (their setup is one diagonal extraction).
+  /// power iterations). Jacobi, SGS and SSOR are always rebuilt (their setup is one pass over the rows).
   int rebuild_every = 1;
   /// With rebuild_every > 1: set up again at the next solve when a solve took more than this factor times
   /// the iterations of the first solve after the last setup (e.g. after the particles were reordered).
@@ -33,9 +36,11 @@ struct PressureSolverSettings {
   Real rebuild_growth = 1.5;
   /// Old name of rebuild_every for MueLu (the larger of the two is used).
   int muelu_rebuild_every = 1;
-  /// Expert: extra parameters for the preconditioner's package, by their MueLu / Ifpack2 names, e.g.
-  /// {"relaxation: sweeps", "2"}; values are read as bool, integer, number or string. They override the
-  /// built-in choices.
+  /// Expert (benchmarks): extra parameters for the preconditioner's package, by their MueLu / Ifpack2
+  /// names, e.g. {"relaxation: sweeps", "2"}, "list/name" for a sublist; values are read as bool, integer,
+  /// number or string and override the built-in choices. Keys "belos: NAME" go to Belos ("belos: manager"
+  /// picks the Belos solver by name); "sgs: omega" sets the relaxation of sgs / ssor, "sgs: ifpack2" =
+  /// true runs sgs / ssor through Ifpack2 RELAXATION instead (three matrix passes per iteration).
   std::map<std::string, std::string> parameters;
 };
 

@@ -109,7 +109,7 @@ struct FluidNumerics {
   Real beta2 = 0.85;            ///< ... and N_i < beta2 N0
   std::string gradient = "min_pressure";  ///< min_pressure | corrected
   std::string solver = "cg";              ///< cg | gmres
-  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | sgs | none
+  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | sgs | ssor | none
   Real tolerance = 1e-8;                  ///< relative residual of the pressure solve
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between

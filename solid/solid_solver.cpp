@@ -239,6 +239,8 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   for (std::size_t i = 0; i < ns; ++i) {
     for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
       const auto j = static_cast<std::size_t>(b_j[b]);
+      assert(j > i && "bonds are stored once, at the smaller index");
+      assert(mu[i] == mu[j] && "bonds join particles of one body and material");
       // Force on i: V 2d/n0 2 mu u/|r0| w0/|r0| with 1/n0 -> (1/n0_i + 1/n0_j)/2 (eq. 36-37).
       b_k[b] = volume * 2 * dim * mu[i] * b_wr[b] * b_inv_r0[b] * (inv_n0[i] + inv_n0[j]);
     }
@@ -319,6 +321,19 @@ void SolidSolver::Impl::contact_forces(std::size_t& n_contacts) {
     s_k.push_back(static_cast<LocalIndex>(k));
   }
   if (s_x.size() < 2) return;
+  // Guard the cell grid: a blown-up state (dt too large) would ask for an absurd number of cells.
+  Vec lo = s_x[0], hi = s_x[0];
+  for (const Vec& y : s_x) {
+    if (!y.allFinite()) throw std::runtime_error("solid: a surface particle has a non-finite position; the run went unstable (reduce dt)");
+    lo = lo.cwiseMin(y);
+    hi = hi.cwiseMax(y);
+  }
+  const Vec cells = (hi - lo) / dp + Vec::Ones();
+  if (cells[0] * cells[1] > 16.0 * static_cast<Real>(n()) + 4e6)
+    throw std::runtime_error(fmt::format(
+        "solid: the surface particles spread over {:.3g} x {:.3g} m ({:.3g} contact cells of side dp for {} particles); "
+        "the run went unstable (reduce dt) or fragments flew too far apart (shrink the domain)",
+        hi[0] - lo[0], hi[1] - lo[1], cells[0] * cells[1], n()));
   build_neighbour_list(s_x, dp, s_nl, s_grid);
   const Real d_min = 0.05 * dp;
   for (std::size_t a = 0; a < s_x.size(); ++a) {
@@ -373,6 +388,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
         ++n_broken;
         n_now[i] -= b_w0[b];
         n_now[j] -= b_w0[b];
+        assert(n_now[i] > -1e-9 && n_now[j] > -1e-9 && "n_i is a sum over intact bonds");
         if (n_now[i] < n_max - n_c) surface[i] = 1;  // eq. 48, irreversible
         if (n_now[j] < n_max - n_c) surface[j] = 1;
         continue;
@@ -485,6 +501,7 @@ void SolidSolver::Impl::compute_fragments() {
   for (std::size_t q = 0; q < order.size(); ++q) rank[static_cast<std::size_t>(order[q])] = static_cast<int>(q);
   for (std::size_t i = 0; i < ns; ++i) fragment[i] = rank[static_cast<std::size_t>(fragment[i])];
   n_frag = roots.size();
+  assert(ns == 0 || sizes[static_cast<std::size_t>(order[0])] >= sizes[static_cast<std::size_t>(order.back())]);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -48,7 +48,13 @@ std::vector<std::string> split(const std::string& s, const char sep) {
 }
 
 Variant parse_variant(const std::string& text, const CaseSpec& spec) {
-  const auto parts = split(text, ':');
+  // label:preconditioner[:parameters] (parameter names may hold ':' themselves)
+  std::vector<std::string> parts;
+  const auto c1 = text.find(':'), c2 = c1 == std::string::npos ? c1 : text.find(':', c1 + 1);
+  if (c1 != std::string::npos) {
+    parts = {text.substr(0, c1), text.substr(c1 + 1, c2 == std::string::npos ? std::string::npos : c2 - c1 - 1)};
+    if (c2 != std::string::npos) parts.push_back(text.substr(c2 + 1));
+  }
   if (parts.size() < 2) throw std::invalid_argument("variant '" + text + "': expected label:preconditioner[:k=v,...]");
   Variant v;
   v.label = parts[0];

@@ -184,7 +184,8 @@ INSTANTIATE_TEST_SUITE_P(AllChoices, PressureSolve,
                          ::testing::Values(std::make_pair("cg", "muelu"), std::make_pair("cg", "chebyshev"),
                                            std::make_pair("cg", "ilu"), std::make_pair("cg", "jacobi"),
                                            std::make_pair("cg", "none"), std::make_pair("gmres", "muelu"),
-                                           std::make_pair("gmres", "ilu")));
+                                           std::make_pair("gmres", "ilu"), std::make_pair("cg", "sgs"),
+                                           std::make_pair("cg", "ssor"), std::make_pair("gmres", "ssor")));
 
 TEST(PressureSolve, RejectsUnknownChoices) {
   PressureSolverSettings settings;

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -99,7 +100,25 @@ HydrostaticResult run_hydrostatic() {
   Real sum = 0;
   int n_samples = 0;
   Real next = settle;
+  Real next_report = 0.1;
   run(spec, p, end, [&](const Real t) {
+    if (t + 1e-12 >= next_report) {  // speed history: how the noise develops
+      next_report += 0.1;
+      std::vector<Real> v;
+      Vec x_max = Vec::Zero();
+      Real v_top = -1;
+      for (std::size_t i = 0; i < p.size(); ++i)
+        if (p.kind[i] == ParticleKind::fluid) {
+          v.push_back(p.velocity[i].norm());
+          if (v.back() > v_top) {
+            v_top = v.back();
+            x_max = p.position[i];
+          }
+        }
+      std::sort(v.begin(), v.end());
+      std::printf("    t = %.2f s: speed median %.2e, 99th percentile %.2e, max %.2e m/s at (%.3f, %.3f)\n", t,
+                  v[v.size() / 2], v[v.size() * 99 / 100], v.back(), x_max[0], x_max[1]);
+    }
     if (t + 1e-12 < next) return;
     next += 0.01;
     sum += probe_pressure(p, probe, spec.dp);
@@ -145,7 +164,11 @@ TEST(FluidValidation, HydrostaticPressureAndVolume) {
 }
 
 // Acceptance criterion not met yet (docs/validation.md, ## Fluid): the particles keep a velocity noise of
-// about 0.05 m/s (median) instead of < 1 % of sqrt(g h) = 0.014 m/s. Disabled so that it shows as
+// about 0.05 m/s (median; max 0.2-0.33 m/s) instead of < 1 % of sqrt(g h) = 0.014 m/s. Measured: the
+// start-up compression wave (period ~0.08 s) is removed by a gravity ramp, but a particle-scale noise
+// starts at the side walls and grows to the same level for c = 10..40, kappa = 0.05..1, dt_max 0.5..1 ms,
+// collision distance 0.5..0.9 dp, and for a mixed / HS source term (docs/validation.md, second round): it
+// starts in the top row at a side wall and travels along the free surface. Disabled so that it shows as
 // "disabled" in ctest; run it with --gtest_also_run_disabled_tests.
 TEST(FluidValidation, DISABLED_HydrostaticRest) {
   const HydrostaticResult r = run_hydrostatic();
@@ -153,7 +176,9 @@ TEST(FluidValidation, DISABLED_HydrostaticRest) {
 }
 
 // Acceptance criterion not met yet (docs/validation.md, ## Fluid): the front runs ahead of the experiment
-// by up to 24 % at dp = 4 mm. Disabled so that it shows as "disabled" in ctest.
+// by up to 24 % at T = 3 (+9..10 % at T = 1.5). Resolution-converged (dp 4, 3, 2 mm: +23.6, +23.5, +23.9 %)
+// and insensitive to c, kappa, dt; not a spray artefact (the 10th particle from the front is only ~3 %
+// behind the first). Disabled so that it shows as "disabled" in ctest.
 TEST(FluidValidation, DISABLED_DamBreakSurgeFront) {
   const CaseSpec spec = load_case(source_dir + "/cases/dam_break.yaml", overrides({"fluid.preconditioner=jacobi"}));
   Scene scene = build_scene(spec);

@@ -45,10 +45,10 @@ CaseSpec base_case(Real dp) {
 // momentum (orbital + spin I omega) are conserved to round-off, the energy drifts by < 1 %.
 TEST(Solid, FreeBodyConservesMomentumAngularMomentumAndEnergy) {
   CaseSpec spec = base_case(0.01);
-  spec.solid_materials.push_back(material("rubber", 1000, 1e6, 0.3));
+  spec.solid_materials.push_back(material("rubber", 1000, 1e5, 0.3));
   BodySpec b = solid_body("plate", "rubber", Vec(0, 0), Vec(0.2, 0.1));
   b.velocity = Vec(1.0, -0.5);
-  b.angular_velocity = 3.0;
+  b.angular_velocity = 20.0;  // centrifugal stretch: strain energy of a few % of the total
   spec.bodies.push_back(b);
   Scene scene = build_scene(spec);
   SolidSolver solid(spec, scene.particles);
@@ -76,13 +76,13 @@ TEST(Solid, FreeBodyConservesMomentumAngularMomentumAndEnergy) {
   EXPECT_LT(std::abs(d1.angular_momentum - d0.angular_momentum) / std::abs(d0.angular_momentum), 1e-10);
   EXPECT_LT(std::abs(d1.total() - d0.total()) / d0.total(), 0.01);
   EXPECT_LT((e_max - e_min) / d0.total(), 0.01);
-  EXPECT_GT(d1.strain, 0);  // the spin stretched the body: energy did move between the forms
+  EXPECT_GT(d1.strain, 1e-3 * d1.total());  // the spin stretched the body: energy moves between the forms
   // The body turned through about omega t (rigid rotation of the mean particle angle).
   const auto& theta = scene.particles.scalar_field("rotation");
   Real mean_theta = 0;
   for (const Real th : theta) mean_theta += th;
   mean_theta /= static_cast<Real>(theta.size());
-  EXPECT_NEAR(mean_theta, 3.0 * t, 0.05 * 3.0 * t);
+  EXPECT_NEAR(mean_theta, 20.0 * t, 0.05 * 20.0 * t);
 }
 
 // A Gaussian pressure pulse on the left edge of a wide plate: along the centre line, away from the
