@@ -35,6 +35,7 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace mpsfsi {
 
@@ -84,6 +85,7 @@ struct SolidSolver::Impl {
 
   // Per solid particle k (particle index pid[k]).
   std::vector<LocalIndex> pid;
+  std::vector<GlobalId> gid;  ///< global id of solid k (to follow a reordering of the particle set)
   std::vector<Vec> x, v, x0, force;
   std::vector<Real> theta, omega, torque, tr, pn, ch, sh;
   std::vector<Real> mass, inertia, lambda, mu, inv_n0, n_now, eps_max;
@@ -147,7 +149,10 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
     throw CaseError(fmt::format("{}: solid.normalisation = '{}': expected particle, lattice or mean", spec.file, norm));
 
   for (std::size_t i = 0; i < p.size(); ++i)
-    if (p.kind[i] == ParticleKind::solid) pid.push_back(static_cast<LocalIndex>(i));
+    if (p.kind[i] == ParticleKind::solid) {
+      pid.push_back(static_cast<LocalIndex>(i));
+      gid.push_back(p.global_id[i]);
+    }
   const std::size_t ns = n();
 
   f_theta = &p.add_scalar_field("rotation");
@@ -277,7 +282,20 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
 
 void SolidSolver::Impl::gather() {
   if (p.size() != n_total)
-    throw std::logic_error("SolidSolver: the particle set changed size; the solid's bonds refer to particle indices");
+    throw std::logic_error("SolidSolver: the particle set changed size; the solid's bonds refer to its particles");
+  // Another module may have reordered the particle set (ParticleSet::reorder): follow the global ids.
+  bool moved = false;
+  for (std::size_t k = 0; k < n() && !moved; ++k) moved = p.global_id[static_cast<std::size_t>(pid[k])] != gid[k];
+  if (moved) {
+    std::unordered_map<GlobalId, LocalIndex> index_of;
+    index_of.reserve(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) index_of.emplace(p.global_id[i], static_cast<LocalIndex>(i));
+    for (std::size_t k = 0; k < n(); ++k) {
+      const auto it = index_of.find(gid[k]);
+      if (it == index_of.end()) throw std::logic_error("SolidSolver: a solid particle disappeared from the particle set");
+      pid[k] = it->second;
+    }
+  }
   for (std::size_t k = 0; k < n(); ++k) {
     const auto i = static_cast<std::size_t>(pid[k]);
     x[k] = p.position[i];
@@ -637,6 +655,7 @@ std::size_t SolidSolver::n_fragments() const { return impl_->n_frag; }
 
 Real SolidSolver::min_distance_between_fragments() const {
   Impl& m = *impl_;
+  m.gather();
   m.compute_fragments();
   NeighbourList nl;
   std::vector<Vec> x(m.n());

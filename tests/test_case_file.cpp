@@ -190,7 +190,7 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_TRUE(c.output.fields.empty());
   EXPECT_TRUE(c.bodies[0].velocity.isZero());
   EXPECT_FALSE(c.solid.plane_stress);
-  EXPECT_EQ(c.solid.normalisation, "particle");
+  EXPECT_EQ(c.solid.normalisation, "mean");
   EXPECT_DOUBLE_EQ(c.solid.dt_factor, SolidNumerics{}.dt_factor);
   EXPECT_TRUE(c.solid_loads.empty());
 }
@@ -434,7 +434,7 @@ TEST(CaseFileErrors, SolidLoads) {
               HasSubstr("solid_loads[0].direction = [0, 0]: expected a non-zero direction"));
   EXPECT_THAT(error_of(valid_with("width: 0.005", "width: 0")), HasSubstr("solid_loads[0].width = 0: expected a positive number"));
   EXPECT_THAT(error_of(valid_with("normalisation: lattice", "normalisation: grid")),
-              HasSubstr("solid.normalisation = grid: expected one of: particle, lattice"));
+              HasSubstr("solid.normalisation = grid: expected one of: particle, lattice, mean"));
 }
 
 TEST(CaseFileErrors, DuplicateNames) {

@@ -251,5 +251,30 @@ TEST(Solid, BodiesInContactRepelAndNeverInterpenetrate) {
   EXPECT_GT(v_cube / n_cube, v_block / n_block);
 }
 
+// Another module may reorder the particle set between steps (ParticleSet::reorder): the solver follows
+// the global ids and the motion is unchanged.
+TEST(Solid, FollowsAReorderingOfTheParticleSet) {
+  CaseSpec spec = base_case(0.01);
+  spec.gravity = Vec(0, -9.81);
+  spec.solid_materials.push_back(material("rubber", 1000, 1e6, 0.3));
+  BodySpec b = solid_body("plate", "rubber", Vec(0, 0), Vec(0.2, 0.05));
+  b.angular_velocity = 2.0;
+  spec.bodies.push_back(b);
+  Scene a = build_scene(spec), c = build_scene(spec);
+  SolidSolver sa(spec, a.particles), sc(spec, c.particles);
+  const Real dt = sa.stable_dt();
+  for (int k = 0; k < 100; ++k) sa.advance(k * dt, dt), sc.advance(k * dt, dt);
+  std::vector<LocalIndex> order(c.particles.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<LocalIndex>(order.size() - 1 - k);
+  c.particles.reorder(order);
+  for (int k = 100; k < 200; ++k) sa.advance(k * dt, dt), sc.advance(k * dt, dt);
+  for (std::size_t i = 0; i < a.particles.size(); ++i) {
+    const std::size_t j = a.particles.size() - 1 - i;
+    ASSERT_EQ(a.particles.global_id[i], c.particles.global_id[j]);
+    EXPECT_EQ(a.particles.position[i], c.particles.position[j]);
+    EXPECT_EQ(a.particles.scalar_field("rotation")[i], c.particles.scalar_field("rotation")[j]);
+  }
+}
+
 }  // namespace
 }  // namespace mpsfsi
