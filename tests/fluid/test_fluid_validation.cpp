@@ -175,17 +175,21 @@ TEST(FluidValidation, DISABLED_HydrostaticRest) {
   EXPECT_LT(r.v_max, r.v_limit);
 }
 
-// Acceptance criterion not met yet (docs/validation.md, ## Fluid): the front runs ahead of the experiment
-// by up to 24 % at T = 3 (+9..10 % at T = 1.5). Resolution-converged (dp 4, 3, 2 mm: +23.6, +23.5, +23.9 %)
-// and insensitive to c, kappa, dt; not a spray artefact (the 10th particle from the front is only ~3 %
-// behind the first). Disabled so that it shows as "disabled" in ctest.
-TEST(FluidValidation, DISABLED_DamBreakSurgeFront) {
-  const CaseSpec spec = load_case(source_dir + "/cases/dam_break.yaml", overrides({"fluid.preconditioner=jacobi"}));
+namespace {
+/// Smallest and largest relative error of the surge front Z = x/L against the Martin & Moyce table,
+/// for T = t sqrt(2g/L) in [1.5, 3.0].
+struct FrontErrors {
+  Real lo = 1e300, hi = -1e300;
+  int n_compared = 0;
+};
+
+FrontErrors run_dam_break_front() {
+  const CaseSpec spec = load_case(source_dir + "/cases/dam_break.yaml", overrides({}));
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   // Experiment (T, Z).
   std::ifstream in(source_dir + "/cases/dam_break/martin_moyce_1952_surge_front.csv");
-  ASSERT_TRUE(in.good());
+  EXPECT_TRUE(in.good());
   std::vector<Real> te, ze;
   for (std::string line; std::getline(in, line);) {
     if (line.empty() || line[0] == '#' || line[0] == 'T') continue;
@@ -197,13 +201,12 @@ TEST(FluidValidation, DISABLED_DamBreakSurgeFront) {
       ze.push_back(b);
     }
   }
-  ASSERT_EQ(te.size(), 5u);
+  EXPECT_EQ(te.size(), 5u);
   const Real L = spec.bodies[0].rect.hi[0] - spec.bodies[0].rect.lo[0];
   const Real g = -spec.gravity[1];
   const Real t_scale = std::sqrt(2 * g / L);
   const Real end = 3.05 / t_scale;
-  Real worst = 0;
-  int n_compared = 0;
+  FrontErrors e;
   run(spec, p, end, [&](const Real t) {
     const Real T = t * t_scale;
     if (T < 1.5 || T > 3.0) return;
@@ -215,10 +218,32 @@ TEST(FluidValidation, DISABLED_DamBreakSurgeFront) {
     const auto k = std::min<std::size_t>(te.size() - 2, static_cast<std::size_t>(std::upper_bound(te.begin(), te.end(), T) - te.begin()) - 1);
     const Real z_exp = ze[k] + (ze[k + 1] - ze[k]) * (T - te[k]) / (te[k + 1] - te[k]);
     const Real err = (Z - z_exp) / z_exp;
-    if (std::abs(err) > std::abs(worst)) worst = err;
-    ++n_compared;
+    e.lo = std::min(e.lo, err);
+    e.hi = std::max(e.hi, err);
+    ++e.n_compared;
   });
-  std::printf("  dam break: %d samples for T in [1.5, 3.0], worst relative error of Z %.1f %%\n", n_compared, 100 * worst);
-  EXPECT_GT(n_compared, 50);
-  EXPECT_LT(std::abs(worst), 0.10);
+  std::printf("  dam break: %d samples for T in [1.5, 3.0], relative error of Z from %+.1f %% to %+.1f %%\n",
+              e.n_compared, 100 * e.lo, 100 * e.hi);
+  return e;
+}
+}  // namespace
+
+// Acceptance criterion of issue 3 not met yet (docs/validation.md, ## Fluid): the front runs ahead of the
+// experiment by up to 24 % at T = 3 (+9..10 % at T = 1.5). Resolution-converged (dp 4, 3, 2 mm: +23.6, +23.5,
+// +23.9 %) and insensitive to c, kappa, dt; not a spray artefact (the 10th particle from the front is only
+// ~3 % behind the first). Disabled so that it shows as "disabled" in ctest.
+TEST(FluidValidation, DISABLED_DamBreakSurgeFront) {
+  const FrontErrors e = run_dam_break_front();
+  EXPECT_GT(e.n_compared, 50);
+  EXPECT_LT(std::max(std::abs(e.lo), std::abs(e.hi)), 0.10);
+}
+
+// Regression guard while the criterion above is open: the front stays ahead of the experiment by the
+// measured +5..+28 % (measured +9..+24 %); a change that slows it into the 10 % band or breaks the flow
+// fails here and must update docs/validation.md.
+TEST(FluidValidation, DamBreakSurgeFrontMeasuredBand) {
+  const FrontErrors e = run_dam_break_front();
+  EXPECT_GT(e.n_compared, 50);
+  EXPECT_GT(e.lo, 0.05);
+  EXPECT_LT(e.hi, 0.28);
 }
