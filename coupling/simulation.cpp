@@ -1,6 +1,9 @@
 // The run loop: fluid step, solid sub-steps, state checks (non-finite or runaway velocity, solid leaving
-// the domain), frames and probes, progress line and JSON-lines run log.
+// the domain), frames and probes, progress line and JSON-lines run log. With both fluid and solid the
+// steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp).
 #include "coupling/simulation.hpp"
+
+#include "coupling/fsi_interface.hpp"
 
 #include "fluid/fluid_solver.hpp"
 #include "io/probes.hpp"
@@ -66,9 +69,16 @@ class RunLoop {
     MPI_Comm_rank(comm, &rank_);
     log_ = rank_ == 0 && !settings.quiet;
     tty_ = log_ && isatty(fileno(stdout));
-    if (p_.n_of_kind(ParticleKind::fluid) > 0) fluid_ = std::make_unique<FluidSolver>(spec, p_, comm);
-    if (p_.n_of_kind(ParticleKind::solid) > 0) solid_ = std::make_unique<SolidSolver>(spec, p_);
+    const bool has_fluid = p_.n_of_kind(ParticleKind::fluid) > 0, has_solid = p_.n_of_kind(ParticleKind::solid) > 0;
+    if (has_fluid)
+      fluid_ = std::make_unique<FluidSolver>(spec, p_, comm, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
+    if (has_solid) solid_ = std::make_unique<SolidSolver>(spec, p_);
     if (solid_ && rank_ == 0) solid_->set_output_directory(settings.output_dir);  // fragments.csv
+    if (fluid_ && solid_) {
+      coupling_ = std::make_unique<FsiInterface>(spec, p_);
+      coupling_->initialize();
+      if (rank_ == 0) coupling_->open_csv(settings.output_dir + "/interface.csv");
+    }
     writer_.set_fields(spec.output.fields);
     summary_.pvd_path = writer_.pvd_path();
     if (rank_ == 0) {
@@ -99,9 +109,10 @@ class RunLoop {
     if (rank_ == 0)
       jsonl_ << fmt::format(
           "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
-          "\"output\":{:.3f},\"removed\":{},\"peak_memory_kib\":{}}}\n",
-          step_, t_, summary_.wall_seconds, summary_.t_fluid, summary_.t_solid, summary_.t_output,
-          summary_.n_removed, summary_.peak_memory_kib);
+          "\"coupling\":{:.3f},\"output\":{:.3f},\"removed\":{},\"subcycles_raised_steps\":{},"
+          "\"peak_memory_kib\":{}}}\n",
+          step_, t_, summary_.wall_seconds, summary_.t_fluid, summary_.t_solid, summary_.t_coupling, summary_.t_output,
+          summary_.n_removed, summary_.n_subcycles_raised, summary_.peak_memory_kib);
     return summary_;
   }
 
@@ -117,18 +128,47 @@ class RunLoop {
     }
     dt = std::min(dt, spec_.time.end - t_);
     int n_sub = 1;
-    if (fluid_ && solid_) n_sub = resolve_subcycles(spec_.coupling.subcycles, dt, solid_->stable_dt());
+    if (fluid_ && solid_) {
+      // The solid's limit: stable_dt() = solid.dt_factor dp / c_p (dt_factor 0.2 by default; measured
+      // stable up to 0.6, docs/validation.md). A requested N that would exceed it is raised, said once.
+      const Real dt_solid = solid_->stable_dt();
+      const SubcycleChoice choice = choose_subcycles(spec_.coupling.subcycles, dt, dt_solid);
+      n_sub = choice.n;
+      if (choice.raised) {
+        ++summary_.n_subcycles_raised;
+        if (!raised_said_ && log_)
+          fmt::print("{}step {}: subcycles {} would give a solid dt of {:.3e} s > the solid's stable dt {:.3e} s "
+                     "(solid.dt_factor dp / c_p); raised to {} (and whenever needed from now on, counted in the "
+                     "summary)\n",
+                     tty_ ? "\n" : "", step_ + 1, spec_.coupling.subcycles, dt / spec_.coupling.subcycles, dt_solid,
+                     n_sub);
+        raised_said_ = true;
+      }
+    }
     try {
+      if (coupling_) {
+        const auto t0 = Clock::now();
+        coupling_->prepare_fluid_boundary(dt);  // (a)
+        summary_.t_coupling += seconds_since(t0);
+      }
       if (fluid_) {
         const auto t0 = Clock::now();
         last_fluid_ = fluid_->advance(t_, dt);
+        if (coupling_) coupling_->restore_solid();
         summary_.t_fluid += seconds_since(t0);
         summary_.n_removed += last_fluid_.n_removed;
         if (last_fluid_.n_removed > 0 && log_)
           fmt::print("{}step {}: {} fluid particle(s) left the domain and were removed ({} so far)\n", tty_ ? "\n" : "",
                      step_ + 1, last_fluid_.n_removed, summary_.n_removed);
       }
-      if (solid_) {
+      if (coupling_) {
+        auto t0 = Clock::now();
+        coupling_->compute_load();  // (b)
+        summary_.t_coupling += seconds_since(t0);
+        t0 = Clock::now();
+        coupling_->advance_solid(*solid_, t_, dt, n_sub);  // (c), (d): kinematics in the shared set
+        summary_.t_solid += seconds_since(t0);
+      } else if (solid_) {
         const auto t0 = Clock::now();
         const Real dts = dt / n_sub;
         for (int k = 0; k < n_sub; ++k) solid_->advance(t_ + k * dts, dts);
@@ -201,6 +241,7 @@ class RunLoop {
     if (rank_ == 0) {
       writer_.write(p_, t_);
       probes_.record(t_, p_);
+      if (coupling_) coupling_->write_csv(t_);
     }
     summary_.t_output += seconds_since(t0);
   }
@@ -258,6 +299,8 @@ class RunLoop {
   ProbeWriter probes_;
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<SolidSolver> solid_;
+  std::unique_ptr<FsiInterface> coupling_;
+  bool raised_said_ = false;
   std::ofstream jsonl_;
   int rank_ = 0;
   bool log_ = false, tty_ = false;
@@ -273,8 +316,7 @@ class RunLoop {
 }  // namespace
 
 int resolve_subcycles(const int requested, const Real dt_fluid, const Real dt_solid) {
-  if (requested > 0) return requested;
-  return std::max(1, static_cast<int>(std::ceil(dt_fluid / dt_solid * (1 - 1e-12))));
+  return choose_subcycles(requested, dt_fluid, dt_solid).n;
 }
 
 RunSummary run_case(const CaseSpec& spec, Scene scene, const RunSettings& settings, MPI_Comm comm) {
@@ -283,15 +325,20 @@ RunSummary run_case(const CaseSpec& spec, Scene scene, const RunSettings& settin
 }
 
 std::string format_summary(const RunSummary& s) {
-  const double other = std::max(0.0, s.wall_seconds - s.t_fluid - s.t_solid - s.t_output);
+  const double other = std::max(0.0, s.wall_seconds - s.t_fluid - s.t_solid - s.t_coupling - s.t_output);
+  const double wall = std::max(1e-12, s.wall_seconds);
+  const std::string coupling =
+      s.t_coupling > 0 ? fmt::format("coupling {:.2f} s ({:.0f} %), ", s.t_coupling, 100 * s.t_coupling / wall) : "";
   std::string text = fmt::format(
       "run summary: {} steps to t = {:.6g} s in {} wall ({:.3f} s)\n"
-      "  fluid {:.2f} s ({:.0f} %), solid {:.2f} s ({:.0f} %), output {:.2f} s ({:.0f} %), other {:.2f} s\n"
+      "  fluid {:.2f} s ({:.0f} %), solid {:.2f} s ({:.0f} %), {}output {:.2f} s ({:.0f} %), other {:.2f} s\n"
       "  peak memory {:.1f} MiB",
-      s.n_steps, s.end_time, format_duration(s.wall_seconds), s.wall_seconds, s.t_fluid,
-      100 * s.t_fluid / std::max(1e-12, s.wall_seconds), s.t_solid, 100 * s.t_solid / std::max(1e-12, s.wall_seconds),
-      s.t_output, 100 * s.t_output / std::max(1e-12, s.wall_seconds), other, static_cast<double>(s.peak_memory_kib) / 1024);
+      s.n_steps, s.end_time, format_duration(s.wall_seconds), s.wall_seconds, s.t_fluid, 100 * s.t_fluid / wall,
+      s.t_solid, 100 * s.t_solid / wall, coupling, s.t_output, 100 * s.t_output / wall, other,
+      static_cast<double>(s.peak_memory_kib) / 1024);
   if (s.last_subcycles > 1) text += fmt::format("\n  subcycles {} (solid dt {:.3e} s)", s.last_subcycles, s.last_solid_dt);
+  if (s.n_subcycles_raised > 0)
+    text += fmt::format("\n  the requested subcycles were raised to the solid's limit in {} step(s)", s.n_subcycles_raised);
   if (s.n_removed > 0) text += fmt::format("\n  {} fluid particles left the domain and were removed", s.n_removed);
   text += "\n  series " + s.pvd_path;
   return text;

@@ -26,9 +26,11 @@ struct RunSummary {
   Real end_time = 0;
   double wall_seconds = 0;
   double t_fluid = 0, t_solid = 0, t_output = 0;
+  double t_coupling = 0;        ///< interface: surface flags, eq. 50 loads (coupled runs)
   std::size_t n_removed = 0;    ///< fluid particles removed because they left the domain
   long peak_memory_kib = 0;     ///< peak resident memory of the process
   int last_subcycles = 1;
+  std::size_t n_subcycles_raised = 0;  ///< steps where the requested subcycles were raised to the solid limit
   Real last_solid_dt = 0;
   std::string pvd_path;
 };
@@ -43,7 +45,8 @@ class RunFailure : public std::runtime_error {
 /// state becomes invalid.
 RunSummary run_case(const CaseSpec& spec, Scene scene, const RunSettings& settings, MPI_Comm comm);
 
-/// Sub-steps per fluid step: the case's value, or (auto, 0) the smallest N with dt_fluid / N <= dt_solid.
+/// Sub-steps per fluid step: the smallest N with dt_fluid / N <= dt_solid (auto, requested <= 0), or the
+/// case's value raised to that when it would exceed dt_solid (coupling/fsi_interface.hpp choose_subcycles).
 int resolve_subcycles(int requested, Real dt_fluid, Real dt_solid);
 
 /// Text of a run summary (wall time, steps, split by phase, peak memory).

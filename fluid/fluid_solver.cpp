@@ -10,6 +10,7 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "fluid/pressure_solver.hpp"
+#include "io/tank_motion_spec.hpp"
 
 #include <Eigen/LU>
 #include <fmt/format.h>
@@ -41,54 +42,11 @@ enum class Role : std::uint8_t {
 
 inline bool has_row(const Role r) { return r == Role::fluid || r == Role::boundary; }
 
-/// Angle [rad] and angular velocity [rad/s] of a prescribed tank motion.
-class TankMotion {
- public:
-  explicit TankMotion(const TankMotionSpec& spec) : spec_(spec) {
-    if (spec.type != TankMotionType::table) return;
-    std::ifstream in(spec.file);
-    if (!in) throw std::runtime_error("tank_motion: cannot read " + spec.file);
-    std::string line;
-    while (std::getline(in, line)) {
-      std::replace(line.begin(), line.end(), ',', ' ');
-      std::istringstream ls(line);
-      Real t = 0, deg = 0;
-      if (ls >> t >> deg) {
-        time_.push_back(t);
-        angle_.push_back(deg * M_PI / 180.0);
-      }
-    }
-    if (time_.size() < 2) throw std::runtime_error("tank_motion: " + spec.file + " needs at least two rows of time, angle");
-  }
-  bool moving() const { return spec_.type != TankMotionType::none; }
-  const Vec& pivot() const { return spec_.pivot; }
-  /// Angle and angular velocity at time t.
-  std::pair<Real, Real> at(const Real t) const {
-    if (spec_.type == TankMotionType::sine_roll) {
-      const Real w = 2 * M_PI / spec_.period;
-      return {spec_.amplitude * std::sin(w * t), spec_.amplitude * w * std::cos(w * t)};
-    }
-    if (spec_.type == TankMotionType::table) {
-      if (t <= time_.front()) return {angle_.front(), 0.0};
-      if (t >= time_.back()) return {angle_.back(), 0.0};
-      const auto k = static_cast<std::size_t>(std::upper_bound(time_.begin(), time_.end(), t) - time_.begin()) - 1;
-      const Real s = (t - time_[k]) / (time_[k + 1] - time_[k]);
-      const Real omega = (angle_[k + 1] - angle_[k]) / (time_[k + 1] - time_[k]);
-      return {angle_[k] + s * (angle_[k + 1] - angle_[k]), omega};
-    }
-    return {0.0, 0.0};
-  }
-
- private:
-  TankMotionSpec spec_;
-  std::vector<Real> time_, angle_;
-};
-
 }  // namespace
 
 struct FluidSolver::Impl {
   Impl(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
-      : p(particles), opt(options), motion(spec.tank_motion) {
+      : p(particles), opt(options), motion(make_tank_motion(spec.tank_motion)) {
     MPI_Comm_rank(comm, &rank);
     dp = spec.dp;
     re_g = spec.fluid.re_gradient * dp;
@@ -154,21 +112,23 @@ struct FluidSolver::Impl {
     const std::size_t n = p.size();
     roles.resize(n);
     for (std::size_t i = 0; i < n; ++i) roles[i] = role(p.kind[i]);
+    // Coupled solids: flagged (surface) particles are boundary particles, the others dummies.
+    if (opt.boundary_flag_field.empty() || !p.has_scalar_field(opt.boundary_flag_field)) return;
+    const auto& flag = p.scalar_field(opt.boundary_flag_field);
+    for (std::size_t i = 0; i < n; ++i)
+      if (p.kind[i] == ParticleKind::solid) roles[i] = flag[i] != 0 ? Role::boundary : Role::dummy;
   }
 
   /// Walls and their dummy layers follow the tank motion: rotation about the pivot, v = omega x r.
   void move_walls(const Real t) {
     if (!motion.moving()) return;
     const auto [theta, omega] = motion.at(t);
-    Mat rot;
-    rot << std::cos(theta), -std::sin(theta), std::sin(theta), std::cos(theta);
     for (std::size_t i = 0; i < p.size(); ++i) {
       if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
       const auto it = wall_reference.find(p.global_id[i]);
       if (it == wall_reference.end()) continue;
-      const Vec r = rot * (it->second - motion.pivot());
-      p.position[i] = motion.pivot() + r;
-      p.velocity[i] = omega * Vec(-r[1], r[0]);
+      p.position[i] = motion.place(it->second, theta);
+      p.velocity[i] = motion.velocity_at(p.position[i], omega);
     }
   }
 
@@ -248,6 +208,9 @@ struct FluidSolver::Impl {
     const std::size_t n = p.size();
     n_star.resize(n);
     auto& surface = p.scalar_field("free_surface");
+    const std::vector<Real>* offset = nullptr;
+    if (!opt.density_offset_field.empty() && p.has_scalar_field(opt.density_offset_field))
+      offset = &p.scalar_field(opt.density_offset_field);
     for (std::size_t i = 0; i < n; ++i) {
       Real ni = 0;
       int count = 0;
@@ -259,6 +222,7 @@ struct FluidSolver::Impl {
           ++count;
         }
       }
+      if (offset && roles[i] == Role::boundary) ni += (*offset)[i];
       n_star[i] = ni;
       surface[i] = has_row(roles[i]) && ni < beta1 * lat_g.n0 && count < beta2 * lat_g.n_neighbours ? 1.0 : 0.0;
     }

@@ -41,6 +41,14 @@ struct FluidOptions {
   /// Solid particles take part as boundary particles with prescribed position and velocity (PPE rows,
   /// number density, collisions), like wall particles. Off: solids are ignored by the fluid.
   bool solid_as_boundary = false;
+  /// Coupled runs: a solid particle whose scalar field of this name is != 0 is a boundary particle
+  /// (prescribed position and velocity, PPE row); the other solid particles are dummies (number density
+  /// only). Empty, or the field not registered: as solid_as_boundary says. Read at every step.
+  std::string boundary_flag_field;
+  /// Coupled runs: a scalar field added to the number density n* of boundary particles in the PPE
+  /// source and the free-surface check (the coupling puts (n^0)_solid - (n)_solid there, so that the
+  /// solid's own deformation does not act as a fluid density error). Empty or not registered: none.
+  std::string density_offset_field;
 };
 
 class FluidSolver {

@@ -84,11 +84,15 @@ struct TankMotionSpec {
 
 enum class ProbeType { pressure, surge_front, column_height, displacement };
 
+/// Frame of a displacement probe: global, or the tank's rotating frame (R(-theta)(x - pivot) - (x0 - pivot)).
+enum class ProbeFrame { global, tank };
+
 struct ProbeSpec {
   std::string name;
   ProbeType type = ProbeType::pressure;
   Vec position = Vec::Zero();   ///< pressure: probe point; displacement: initial point on the body
   std::string body;             ///< displacement: which body (optional for others)
+  ProbeFrame frame = ProbeFrame::global;  ///< displacement only
 };
 
 struct TimeSpec {

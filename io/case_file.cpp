@@ -841,7 +841,7 @@ void read_probes(MapReader& top, CaseSpec& spec) {
   const Source& src = top.source();
   std::map<std::string, std::string> names;
   for (const Field& item : top.list("probes", "a list of probes, each {name, type, position, body}", false)) {
-    MapReader r(src, item, "a probe {name, type: pressure | surge_front | column_height | displacement, position, body}");
+    MapReader r(src, item, "a probe {name, type: pressure | surge_front | column_height | displacement, position, body, frame}");
     ProbeSpec p;
     p.name = unique_name(r, names, "probes");
     const std::string type = r.choice("type", {"pressure", "surge_front", "column_height", "displacement"});
@@ -852,9 +852,10 @@ void read_probes(MapReader& top, CaseSpec& spec) {
     const std::string position_form = point_form + (p.type == ProbeType::displacement ? " on the body" : "");
     const bool has_position = p.type != ProbeType::surge_front || r.has("position");
     if (has_position) p.position = r.vec("position", position_form);
-    if (p.type == ProbeType::displacement)
+    if (p.type == ProbeType::displacement) {
       p.body = r.name("body", "the name of a solid body (whose displacement is measured)");
-    else if (r.has("body"))
+      p.frame = r.choice("frame", "global", {"global", "tank"}) == "tank" ? ProbeFrame::tank : ProbeFrame::global;
+    } else if (r.has("body"))
       p.body = r.name("body", "the name of a body");
     r.finish();
 

@@ -2,6 +2,7 @@
 #include "io/probes.hpp"
 
 #include "core/kernel.hpp"
+#include "io/tank_motion_spec.hpp"
 
 #include <fmt/format.h>
 
@@ -24,7 +25,7 @@ Real fluid_extent(const ParticleSet& p, const int axis, const Real limit, const 
 }  // namespace
 
 ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path)
-    : dp_(spec.dp) {
+    : dp_(spec.dp), tank_(make_tank_motion(spec.tank_motion)) {
   for (const auto& ps : spec.probes) {
     Probe p{ps, -1, Vec::Zero()};
     if (ps.type == ProbeType::displacement) {
@@ -54,7 +55,7 @@ ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, con
   out_ << "\n";
 }
 
-std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p) const {
+std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t) const {
   std::vector<Real> values;
   const bool has_pressure = p.has_scalar_field("pressure");
   for (const auto& probe : probes_) {
@@ -79,9 +80,14 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p) const {
         values.push_back(fluid_extent(p, 1, probe.spec.position[0] + 2 * dp_, dp_));
         break;
       case ProbeType::displacement: {
+        // Global: x - x0. Tank frame (the tank at rest at t = 0): R(-theta)(x - pivot) - (x0 - pivot).
         Vec d = Vec::Constant(std::numeric_limits<Real>::quiet_NaN());
+        const bool tank_frame = probe.spec.frame == ProbeFrame::tank;
+        const Real theta = tank_frame ? tank_.angle(t) : 0;
         for (std::size_t i = 0; i < p.size(); ++i)
-          if (p.global_id[i] == probe.particle) d = p.position[i] - probe.initial;
+          if (p.global_id[i] == probe.particle)
+            d = tank_frame ? Vec(tank_.to_tank_frame(p.position[i], theta) - (probe.initial - tank_.pivot()))
+                           : Vec(p.position[i] - probe.initial);
         values.push_back(d[0]);
         values.push_back(d[1]);
         break;
@@ -94,7 +100,7 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p) const {
 void ProbeWriter::record(const Real t, const ParticleSet& particles) {
   if (probes_.empty()) return;
   out_ << fmt::format("{:.9g}", t);
-  for (const Real v : evaluate(particles)) out_ << fmt::format(",{:.9g}", v);
+  for (const Real v : evaluate(particles, t)) out_ << fmt::format(",{:.9g}", v);
   out_ << "\n";
   out_.flush();
 }

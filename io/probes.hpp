@@ -1,8 +1,10 @@
 // Probes written as CSV, one row per output time: pressure at a point (kernel-averaged), surge-front
-// position, water-column height at the back wall, and the displacement of a point of a body.
+// position, water-column height at the back wall, and the displacement of a point of a body (in the
+// global frame or in the rotating frame of the tank, seed 004 §5.4 Fig. 12).
 #pragma once
 
 #include "core/particles.hpp"
+#include "core/tank_motion.hpp"
 #include "io/case.hpp"
 
 #include <fstream>
@@ -19,8 +21,9 @@ class ProbeWriter {
   bool empty() const { return probes_.empty(); }
   /// Append one row at time t.
   void record(Real t, const ParticleSet& particles);
-  /// Values of the probes now, in the order of the case file (the columns after time).
-  std::vector<Real> evaluate(const ParticleSet& particles) const;
+  /// Values of the probes at time t (the tank-frame probes need the tank angle theta(t)), in the order
+  /// of the case file (the columns after time).
+  std::vector<Real> evaluate(const ParticleSet& particles, Real t) const;
   /// Column names after "time" (a displacement probe has two: _dx and _dy).
   const std::vector<std::string>& columns() const { return columns_; }
 
@@ -31,6 +34,7 @@ class ProbeWriter {
     Vec initial = Vec::Zero();
   };
   Real dp_;
+  TankMotion tank_;
   std::vector<Probe> probes_;
   std::vector<std::string> columns_;
   std::ofstream out_;

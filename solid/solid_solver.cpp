@@ -25,6 +25,7 @@
 
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
+#include "io/tank_motion_spec.hpp"
 
 #include <fmt/format.h>
 
@@ -81,7 +82,8 @@ struct SolidSolver::Impl {
   Real c_p_max = 0;
   bool plane_stress = false;
   Vec gravity = Vec::Zero();
-  std::size_t n_total = 0;  ///< particle count at construction (bonds refer to local indices)
+  TankMotion tank;          ///< prescribed tank roll; clamped particles follow it
+  std::size_t n_total = 0;  ///< particle count at the last gather (a change means pid must be re-resolved)
 
   // Per solid particle k (particle index pid[k]).
   std::vector<LocalIndex> pid;
@@ -143,6 +145,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   dt_factor = spec.solid.dt_factor;
   plane_stress = spec.solid.plane_stress;
   gravity = spec.gravity;
+  tank = make_tank_motion(spec.tank_motion);
   n_total = p.size();
   const std::string& norm = spec.solid.normalisation;
   if (norm != "particle" && norm != "lattice" && norm != "mean")
@@ -239,7 +242,10 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
     n_now[i] = n0[i];
   }
   n_max = std::max(n_max, n0_lattice);
-  for (std::size_t i = 0; i < ns; ++i) surface[i] = n0[i] < n_max - n_c;
+  for (std::size_t i = 0; i < ns; ++i) {
+    surface[i] = n0[i] < n_max - n_c;
+    (*f_surface)[static_cast<std::size_t>(pid[i])] = surface[i];
+  }
   b_k.resize(b_j.size());
   for (std::size_t i = 0; i < ns; ++i) {
     for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
@@ -281,10 +287,11 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
 }
 
 void SolidSolver::Impl::gather() {
-  if (p.size() != n_total)
-    throw std::logic_error("SolidSolver: the particle set changed size; the solid's bonds refer to its particles");
-  // Another module may have reordered the particle set (ParticleSet::reorder): follow the global ids.
-  bool moved = false;
+  // Another module may have reordered the particle set (ParticleSet::reorder) or removed particles
+  // (the fluid removes particles that leave the domain; solid particles are never removed): follow
+  // the global ids. Bonds refer to solid indices k, which do not change.
+  bool moved = p.size() != n_total;
+  n_total = p.size();
   for (std::size_t k = 0; k < n() && !moved; ++k) moved = p.global_id[static_cast<std::size_t>(pid[k])] != gid[k];
   if (moved) {
     std::unordered_map<GlobalId, LocalIndex> index_of;
@@ -312,6 +319,7 @@ void SolidSolver::Impl::scatter() {
     p.velocity[i] = v[k];
     (*f_theta)[i] = theta[k];
     (*f_omega)[i] = omega[k];
+    (*f_surface)[i] = surface[k];  // eq. 48, current after every step (the coupling reads it)
   }
 }
 
@@ -457,14 +465,16 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     for (const auto k : load.members) force[static_cast<std::size_t>(k)] += f;
   }
 
-  // Symplectic Euler (eq. 39-40, 45-46); clamped particles keep zero displacement.
+  // Symplectic Euler (eq. 39-40, 45-46); clamped particles are attached to the tank: they follow its
+  // prescribed roll about the pivot (at rest without a tank motion).
   Real v2_max = 0;
+  const auto [tank_theta, tank_omega] = tank.at(t + dt);
   for (std::size_t k = 0; k < ns; ++k) {
     if (clamped[k]) {
-      x[k] = x0[k];
-      v[k].setZero();
-      theta[k] = 0;
-      omega[k] = 0;
+      x[k] = tank.place(x0[k], tank_theta);
+      v[k] = tank.velocity_at(x[k], tank_omega);
+      theta[k] = tank_theta;
+      omega[k] = tank_omega;
       continue;
     }
     v[k] += (dt / mass[k]) * force[k];

@@ -421,6 +421,16 @@ TEST(CaseFileErrors, ProbeOfAnUnknownBody) {
               HasSubstr("probes[1].position = [0.3, 0.198]: expected a point on body 'plate'"));
 }
 
+TEST(CaseFile, DisplacementProbeFrame) {
+  const std::string probe = "position: [0.406, 0.198], body: plate";
+  EXPECT_EQ(parse_case(valid_text(), file_name).probes[1].frame, ProbeFrame::global);
+  const CaseSpec c = parse_case(valid_with(probe, probe + ", frame: tank"), file_name);
+  EXPECT_EQ(c.probes[1].frame, ProbeFrame::tank);
+  EXPECT_THAT(error_of(valid_with(probe, probe + ", frame: plate")), HasSubstr("probes[1].frame = plate: expected one of: global, tank"));
+  EXPECT_THAT(error_of(valid_with("position: [0.59, 0.01]}", "position: [0.59, 0.01], frame: tank}")),
+              HasSubstr("unknown key 'frame' in probes[0]"));  // only displacement probes have a frame
+}
+
 TEST(CaseFileErrors, SolidLoads) {
   const std::string text = valid_with("body: plate, region", "body: column, region");
   EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "body: column, region") +

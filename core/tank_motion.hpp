@@ -1,0 +1,72 @@
+// Prescribed rigid roll of a tank about a pivot (seed 004 §5.4): the angle theta(t) [rad, counter-
+// clockwise positive] and angular velocity omega(t) [rad/s] of a sine roll or of a measured angle series
+// (a table of time, angle). The fluid moves its walls with it, the solid its clamped particles, and the
+// probes use it to express displacements in the tank's frame. Knows nothing of case files:
+// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec.
+#pragma once
+
+#include "core/types.hpp"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mpsfsi {
+
+struct TankMotionParams {
+  enum class Type { none, sine_roll, table };
+  Type type = Type::none;
+  Vec pivot = Vec::Zero();    ///< rotation centre [m]
+  Real amplitude = 0;         ///< sine_roll: amplitude [rad]
+  Real period = 1;            ///< sine_roll: period [s]
+  std::vector<Real> time;     ///< table: sample times [s], strictly increasing
+  std::vector<Real> angle;    ///< table: angles [rad] at those times
+  /// table: omega(t) = (theta(t + h) - theta(t - h)) / 2h on the linear interpolant (a centred difference
+  /// over a window of 2h, i.e. the exact derivative of theta averaged over [t - h, t + h]); h [s].
+  Real derivative_half_window = 0.025;
+};
+
+/// Reads a CSV (or whitespace-separated) file of time [s], angle [deg] into params.time / params.angle
+/// (angle converted to radians). Lines that do not start with two numbers (comments, headers) are
+/// skipped. Throws std::runtime_error if the file cannot be read, has fewer than two rows or times that
+/// do not increase.
+void read_angle_table(const std::string& path, TankMotionParams& params);
+
+class TankMotion {
+ public:
+  /// No motion: theta = omega = 0.
+  TankMotion() = default;
+  /// Throws std::invalid_argument for a table with fewer than two rows, unequal columns, times that
+  /// do not increase, or a non-positive period / half window.
+  explicit TankMotion(TankMotionParams params);
+
+  bool moving() const { return params_.type != TankMotionParams::Type::none; }
+  const Vec& pivot() const { return params_.pivot; }
+  const TankMotionParams& params() const { return params_; }
+
+  /// theta(t) [rad]. sine_roll: A sin(2 pi t / T). table: linear interpolation; before the first row the
+  /// first angle, after the last row the last angle (the tank stops).
+  Real angle(Real t) const;
+  /// omega(t) = d theta / dt [rad/s]. sine_roll: exact. table: centred difference over [t - h, t + h]
+  /// (clipped to the table; zero before the first and after the last row).
+  Real angular_velocity(Real t) const;
+  /// {theta(t), omega(t)}.
+  std::pair<Real, Real> at(Real t) const { return {angle(t), angular_velocity(t)}; }
+  /// Last time of a table (the motion stops afterwards); +inf for sine_roll and none.
+  Real end_time() const;
+
+  /// Rotation matrix R(theta).
+  static Mat rotation(Real theta);
+  /// Where a point x0 of the tank at rest is at angle theta: pivot + R(theta) (x0 - pivot).
+  Vec place(const Vec& x0, Real theta) const;
+  /// Velocity of the tank point now at x, rotating with omega about the pivot: omega x (x - pivot).
+  Vec velocity_at(const Vec& x, Real omega) const;
+  /// x (global) in the tank frame at angle theta, relative to the pivot: R(-theta) (x - pivot).
+  Vec to_tank_frame(const Vec& x, Real theta) const;
+
+ private:
+  Real interpolate(Real t) const;
+  TankMotionParams params_;
+};
+
+}  // namespace mpsfsi

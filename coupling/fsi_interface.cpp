@@ -1,0 +1,217 @@
+// Partitioned fluid-solid coupling (seed 004 §4.5, eq. 49-51): see fsi_interface.hpp.
+#include "coupling/fsi_interface.hpp"
+
+#include "core/kernel.hpp"
+#include "solid/solid_solver.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace mpsfsi {
+
+SubcycleChoice choose_subcycles(const int requested, const Real dt_fluid, const Real dt_solid) {
+  SubcycleChoice c;
+  const int automatic = std::max(1, static_cast<int>(std::ceil(dt_fluid / dt_solid * (1 - 1e-12))));
+  if (requested <= 0) {
+    c.n = automatic;
+  } else if (requested < automatic) {
+    c.n = automatic;
+    c.raised = true;
+  } else {
+    c.n = requested;
+  }
+  return c;
+}
+
+FsiInterface::FsiInterface(const CaseSpec& spec, ParticleSet& particles, const FsiOptions& options)
+    : p_(particles), opt_(options) {
+  dp_ = spec.dp;
+  re_ = spec.fluid.re_gradient * spec.dp;
+  n0_ = lattice_constants(dp_, re_).n0;
+}
+
+FluidOptions FsiInterface::fluid_options(const FsiOptions& options, FluidOptions base) {
+  base.solid_as_boundary = false;
+  base.boundary_flag_field = options.flag_field;
+  if (options.freeze_solid_density) base.density_offset_field = options.offset_field;
+  return base;
+}
+
+void FsiInterface::initialize() {
+  // (n_i^0)_solid: number density of each solid particle counting solid particles only (eq. 51).
+  std::vector<Vec> xs;
+  std::vector<GlobalId> ids;
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) {
+      xs.push_back(p_.position[i]);
+      ids.push_back(p_.global_id[i]);
+    }
+  NeighbourList nl;
+  build_neighbour_list(xs, re_, nl);
+  n0_solid_.clear();
+  n0_solid_.reserve(xs.size());
+  for (std::size_t k = 0; k < xs.size(); ++k) {
+    Real n = 0;
+    for (std::size_t q = nl.begin(k); q < nl.end(k); ++q) n += weight((xs[static_cast<std::size_t>(nl.index[q])] - xs[k]).norm(), re_);
+    n0_solid_[ids[k]] = n;
+  }
+  bodies_.clear();
+  body_slot_.assign(p_.bodies.size(), -1);
+  for (std::size_t b = 0; b < p_.bodies.size(); ++b)
+    if (p_.bodies[b].kind == ParticleKind::solid) {
+      body_slot_[b] = static_cast<int>(bodies_.size());
+      InterfaceBody ib;
+      ib.name = p_.bodies[b].name;
+      ib.body = static_cast<std::uint16_t>(b);
+      bodies_.push_back(ib);
+    }
+  p_.add_vector_field(opt_.load_field);
+  if (opt_.freeze_solid_density) p_.add_scalar_field(opt_.offset_field);
+  initialized_ = true;
+}
+
+void FsiInterface::prepare_fluid_boundary(const Real dt) {
+  if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
+  if (!p_.has_scalar_field(opt_.flag_field))
+    throw std::logic_error("FsiInterface: the solid does not publish its surface flag '" + opt_.flag_field + "'");
+  saved_.clear();
+  if (opt_.midstep_predictor && dt > 0 && !mean_v_.empty()) {
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+      if (p_.kind[i] != ParticleKind::solid) continue;
+      saved_.push_back({p_.global_id[i], p_.position[i], p_.velocity[i]});
+      const auto it = mean_v_.find(p_.global_id[i]);
+      const Vec u = it != mean_v_.end() ? it->second : Vec::Zero();
+      p_.position[i] += 0.5 * dt * u;
+      p_.velocity[i] = u;
+    }
+  }
+  if (!opt_.freeze_solid_density) return;
+  solid_x_.clear();
+  solid_i_.clear();
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) {
+      solid_x_.push_back(p_.position[i]);
+      solid_i_.push_back(static_cast<LocalIndex>(i));
+    }
+  build_neighbour_list(solid_x_, re_, solid_nl_, solid_grid_);
+  auto& offset = p_.scalar_field(opt_.offset_field);
+  for (std::size_t k = 0; k < solid_x_.size(); ++k) {
+    Real n = 0;
+    for (std::size_t q = solid_nl_.begin(k); q < solid_nl_.end(k); ++q)
+      n += weight((solid_x_[static_cast<std::size_t>(solid_nl_.index[q])] - solid_x_[k]).norm(), re_);
+    const auto i = static_cast<std::size_t>(solid_i_[k]);
+    offset[i] = n0_solid_.at(p_.global_id[i]) - n;
+  }
+}
+
+void FsiInterface::restore_solid() {
+  if (saved_.empty()) return;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p_.size() && k < saved_.size(); ++i) {
+    if (p_.kind[i] != ParticleKind::solid) continue;
+    // Removal keeps the order of the remaining particles, and solids are never removed.
+    if (p_.global_id[i] != saved_[k].id) throw std::logic_error("FsiInterface: the solid particles changed order");
+    p_.position[i] = saved_[k].x;
+    p_.velocity[i] = saved_[k].v;
+    ++k;
+  }
+  saved_.clear();
+}
+
+void FsiInterface::compute_load() {
+  if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
+  auto& load = p_.vector_field(opt_.load_field);
+  const auto& flag = p_.scalar_field(opt_.flag_field);
+  const auto& pressure = p_.scalar_field(opt_.pressure_field);
+  std::fill(load.begin(), load.end(), Vec::Zero());
+  loaded_.clear();
+  for (auto& b : bodies_) {
+    b.force.setZero();
+    b.n_wetted = 0;
+  }
+  grid_.build(p_.position, re_);
+  const int nx = grid_.n_cells(0), ny = grid_.n_cells(1);
+  const auto& sorted = grid_.sorted();
+  const auto& xs = grid_.sorted_positions();
+  const Real volume = std::pow(dp_, dim);
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    if (p_.kind[i] != ParticleKind::solid || flag[i] == 0) continue;
+    const auto it = n0_solid_.find(p_.global_id[i]);
+    if (it == n0_solid_.end()) throw std::logic_error("FsiInterface: a solid particle appeared after initialize()");
+    const Vec xi = p_.position[i];
+    const Real pi = pressure[i];
+    Real n_total = 0;
+    Vec sum = Vec::Zero();
+    bool wet = false;
+    const auto c = grid_.cell_of_point(i);
+    for (int cy = std::max(c[1] - 1, 0); cy <= std::min(c[1] + 1, ny - 1); ++cy) {
+      const std::size_t first = grid_.cell_start(grid_.cell_index(std::max(c[0] - 1, 0), cy));
+      const std::size_t last = grid_.cell_start(grid_.cell_index(std::min(c[0] + 1, nx - 1), cy) + 1);
+      for (std::size_t q = first; q < last; ++q) {
+        const Vec rij = xs[q] - xi;
+        const Real r2 = rij.squaredNorm();
+        if (!in_support(r2, re_)) continue;
+        const auto j = static_cast<std::size_t>(sorted[q]);
+        const Real w = re_ / std::sqrt(r2) - 1.0;
+        n_total += w;
+        const bool fluid = p_.kind[j] == ParticleKind::fluid;
+        if (!fluid && !(p_.kind[j] == ParticleKind::solid && flag[j] != 0)) continue;  // j*: fluid, solid surface
+        wet = wet || fluid;
+        sum += (0.5 * (pi + pressure[j]) * w / r2) * rij;
+      }
+    }
+    const Real n_tilde = n_total - it->second;  // eq. 51
+    if (!wet || !(n_tilde > 0)) continue;
+    const Real n_norm = opt_.normalisation == FsiOptions::Normalisation::seed ? n_tilde : n0_;
+    const Vec f = -volume * (2.0 * dim / n_norm) * sum;  // eq. 50 times the particle volume, as -grad P
+    load[i] = f;
+    loaded_.push_back(static_cast<LocalIndex>(i));
+    const int slot = body_slot_[p_.body[i]];
+    if (slot >= 0) {
+      bodies_[static_cast<std::size_t>(slot)].force += f;
+      ++bodies_[static_cast<std::size_t>(slot)].n_wetted;
+    }
+  }
+}
+
+void FsiInterface::advance_solid(SolidSolver& solid, const Real t, const Real dt, const int n_sub) {
+  if (n_sub < 1) throw std::invalid_argument(fmt::format("FsiInterface::advance_solid: n_sub = {} < 1", n_sub));
+  const Real dts = dt / n_sub;
+  for (auto& b : bodies_) b.work_step = 0;
+  const auto& load = p_.vector_field(opt_.load_field);
+  solid_x_.clear();
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) solid_x_.push_back(p_.position[i]);
+  for (int k = 0; k < n_sub; ++k) {
+    solid.advance(t + k * dts, dts);
+    // Symplectic Euler: the displacement of the sub-step is v_new dts, so F . v_new dts is the work.
+    for (const LocalIndex li : loaded_) {
+      const auto i = static_cast<std::size_t>(li);
+      const int slot = body_slot_[p_.body[i]];
+      if (slot >= 0) bodies_[static_cast<std::size_t>(slot)].work_step += dts * load[i].dot(p_.velocity[i]);
+    }
+  }
+  for (auto& b : bodies_) b.work_total += b.work_step;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) mean_v_[p_.global_id[i]] = (p_.position[i] - solid_x_[k++]) / dt;
+}
+
+void FsiInterface::open_csv(const std::string& path) {
+  csv_.open(path);
+  if (!csv_) throw std::runtime_error("cannot write " + path);
+  csv_ << "time,body,fx,fy,work_step,work_total,wetted\n";
+}
+
+void FsiInterface::write_csv(const Real t) {
+  if (!csv_.is_open()) return;
+  for (const auto& b : bodies_)
+    csv_ << fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g},{}\n", t, b.name, b.force[0], b.force[1], b.work_step,
+                        b.work_total, b.n_wetted);
+  csv_.flush();
+}
+
+}  // namespace mpsfsi

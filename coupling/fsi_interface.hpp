@@ -1,0 +1,133 @@
+// Partitioned fluid-solid coupling of seed 004 §4.5-4.6 (eq. 49-51), shaped as a participant loop in the
+// manner of preCICE. Fluid and solid share one ParticleSet; per fluid step the driver calls
+//   prepare_fluid_boundary()   (a) solid surface particles (field "surface", eq. 48) enter the fluid step as
+//                                  boundary particles with the solid's current position and velocity (PPE
+//                                  rows); interior solid particles are dummies. The fluid does this itself
+//                                  from FluidOptions::boundary_flag_field (see fluid_options()).
+//   <fluid advance>
+//   compute_load()             (b) reads the pressures and writes the interface force of eq. 50 on each
+//                                  wetted solid surface particle into the solid's field "solid_load"
+//   advance_solid(...)         (c) advances the solid N sub-steps of dt / N with that load held, and
+//                                  integrates the work the load does; (d) the solid's new position and
+//                                  velocity are in the shared set, which is what the fluid sees next step.
+// fluid/ and solid/ know nothing of each other; only this folder sees both.
+//
+// Interface force (eq. 50), per wetted solid surface particle i, per unit thickness:
+//   F_i = -V * 2d / n_norm * sum_{j*} (P_i + P_j)/2 * (r_j - r_i) / |r_j - r_i|^2 * w(|r_ij|),   V = dp^d
+// over fluid and solid-surface neighbours j* within re (the fluid's re_gradient); dummies, walls and
+// interior solid particles are left out. The minus sign makes it -grad P: the fluid's pressure pushes the
+// solid away from the fluid. A particle counts as wetted when it has a fluid neighbour and
+// n~_i = (n_i)_total - (n_i^0)_solid > 0 (eq. 51; (n_i^0)_solid from the initial configuration, solid
+// particles only). n_norm is n~_i with Normalisation::seed (eq. 50-51 as written) or the lattice n0 with
+// Normalisation::lattice (default): with n~_i a flat wetted face under a uniform pressure P gets
+// 3.0 P dp per particle instead of P dp (n0 / n~ = 6.54 / 2.12 at re = 2.1 dp); see docs/validation.md.
+//
+// Stability of the explicit (weak) coupling: the fluid's pressure answers the solid's displacement like a
+// stiff spring one step late, which pumps energy into the solid (measured: interface work 30 J/m by 0.7 s in
+// the dam break on the plate, whose physical energy is ~1 J/m). Two generic measures cut it tenfold
+// (docs/validation.md, ## Coupling): the fluid sees the solid at mid-step (midstep_predictor) and the
+// solid's own deformation does not enter the fluid's density source (freeze_solid_density).
+#pragma once
+
+#include "core/neighbours.hpp"
+#include "core/particles.hpp"
+#include "fluid/fluid_solver.hpp"
+#include "io/case.hpp"
+
+#include <fstream>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace mpsfsi {
+
+class SolidSolver;
+
+struct FsiOptions {
+  enum class Normalisation { lattice, seed };
+  Normalisation normalisation = Normalisation::lattice;
+  std::string flag_field = "surface";       ///< solid surface flag (eq. 48), kept current by the solid
+  std::string load_field = "solid_load";    ///< external force per particle read by the solid [N/m]
+  std::string pressure_field = "pressure";  ///< the fluid's pressure (fluid and boundary particles) [Pa]
+  /// The fluid's PPE sees the solid at its initial number density: (a) writes (n_i^0)_solid - (n_i)_solid
+  /// into offset_field, which the fluid adds to n* of its boundary particles.
+  bool freeze_solid_density = true;
+  /// The fluid sees the solid at the middle of the coming step: x^n + u dt/2 with velocity u, u the
+  /// solid's mean velocity over the previous step (its displacement / dt, free of the sub-steps'
+  /// oscillations). restore_solid() puts the solid's own state back after the fluid step.
+  bool midstep_predictor = true;
+  std::string offset_field = "fsi_density_offset";
+};
+
+/// Interface quantities of one solid body.
+struct InterfaceBody {
+  std::string name;
+  std::uint16_t body = 0;       ///< index into ParticleSet::bodies
+  Vec force = Vec::Zero();      ///< total fluid force at the last compute_load [N per unit thickness]
+  Real work_step = 0;           ///< work of the interface load over the last advance_solid [J per unit thickness]
+  Real work_total = 0;          ///< cumulative work of the interface load [J per unit thickness]
+  std::size_t n_wetted = 0;     ///< wetted surface particles at the last compute_load
+};
+
+/// Sub-steps per fluid step. requested > 0: that N, raised to the automatic value (`raised`) when
+/// dt_fluid / N would exceed dt_solid; requested <= 0 (auto): the smallest N with dt_fluid / N <= dt_solid.
+struct SubcycleChoice {
+  int n = 1;
+  bool raised = false;
+};
+SubcycleChoice choose_subcycles(int requested, Real dt_fluid, Real dt_solid);
+
+class FsiInterface {
+ public:
+  /// The interface of `particles` (fluid and solid particles, plus walls) for the case `spec`.
+  FsiInterface(const CaseSpec& spec, ParticleSet& particles, const FsiOptions& options = {});
+
+  /// The fluid's options for a coupled run: solid surface particles are boundary, the rest dummies.
+  static FluidOptions fluid_options(const FsiOptions& options = {}, FluidOptions base = {});
+  const FsiOptions& options() const { return opt_; }
+
+  /// (n_i^0)_solid of every solid particle from the current (initial) configuration, and the bodies.
+  void initialize();
+  /// (a) Checks that the solid publishes its surface flag (the fluid reads it at its next step) and, with
+  /// freeze_solid_density, writes the density offset of the solid particles.
+  void prepare_fluid_boundary(Real dt = 0);
+  /// After the fluid step: the solid's own positions and velocities back (midstep_predictor).
+  void restore_solid();
+  /// (b) Eq. 50 from the current pressures into the load field; totals per body.
+  void compute_load();
+  /// (c) + (d) n_sub solid sub-steps of dt / n_sub from t with the load held; the work F . v dt of
+  /// every sub-step is summed per body.
+  void advance_solid(SolidSolver& solid, Real t, Real dt, int n_sub);
+
+  const std::vector<InterfaceBody>& bodies() const { return bodies_; }
+  /// Lattice number density n0 used with Normalisation::lattice.
+  Real n0() const { return n0_; }
+
+  /// interface.csv: time, body, fx, fy, work_step, work_total, wetted (one row per solid body).
+  void open_csv(const std::string& path);
+  void write_csv(Real t);
+
+ private:
+  ParticleSet& p_;
+  FsiOptions opt_;
+  Real dp_ = 0, re_ = 0, n0_ = 0;
+  bool initialized_ = false;
+  std::unordered_map<GlobalId, Real> n0_solid_;
+  std::vector<InterfaceBody> bodies_;
+  std::vector<int> body_slot_;           ///< ParticleSet body -> index into bodies_, or -1
+  std::vector<LocalIndex> loaded_;       ///< particles with a load at the last compute_load
+  struct Saved {
+    GlobalId id;
+    Vec x, v;
+  };
+  std::vector<Saved> saved_;             ///< solid state during the fluid step (midstep_predictor)
+  std::unordered_map<GlobalId, Vec> mean_v_;  ///< solid mean velocity over the last step
+  std::vector<Vec> solid_x_;             ///< scratch: solid positions (offset field)
+  std::vector<LocalIndex> solid_i_;
+  NeighbourList solid_nl_;
+  CellGrid solid_grid_;
+  CellGrid grid_;
+  std::ofstream csv_;
+};
+
+}  // namespace mpsfsi

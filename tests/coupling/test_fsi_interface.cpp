@@ -1,0 +1,159 @@
+// Interface force of the fluid-solid coupling (seed 004 eq. 50-51, coupling/fsi_interface.hpp): a plate of
+// solid particles beside water with a prescribed hydrostatic pressure field carries rho g h^2 / 2 per unit
+// width, pushed away from the water; no fluid, no force; the work of the load equals the energy the solid
+// gains; the sub-cycling ratio.
+#include "coupling/fsi_interface.hpp"
+#include "io/case.hpp"
+#include "io/scene.hpp"
+#include "solid/solid_solver.hpp"
+
+#include <gtest/gtest.h>
+#include <fmt/format.h>
+
+#include <cmath>
+
+using namespace mpsfsi;
+
+namespace {
+
+constexpr Real rho = 1000, g = 9.81, h = 0.1, dp = 0.002;
+
+/// Water 0.1 m deep beside a plate 12 mm thick and 0.15 m high clamped 3 dp deep into the floor of a tank
+/// 0.3 m wide (as cases/dam_break_elastic_plate.yaml); `water_left`: the water is left of the plate.
+CaseSpec plate_case(const bool with_water, const bool water_left, const Real gravity = g) {
+  std::string bodies;
+  const Real x_plate = water_left ? 0.1 : 0.15, x_water = water_left ? 0.0 : 0.162;
+  if (with_water)
+    bodies += fmt::format("  - {{name: water, kind: fluid, material: water, rectangle: {{min: [{}, 0], max: [{}, {}]}}}}\n",
+                          x_water, x_water + 0.1, h);
+  bodies += fmt::format(
+      "  - {{name: plate, kind: solid, material: plate, rectangle: {{min: [{}, {}], max: [{}, 0.15]}},\n"
+      "     clamp: {{min: [{}, {}], max: [{}, 0]}}}}\n",
+      x_plate, -3 * dp, x_plate + 0.012, x_plate - dp, -4 * dp, x_plate + 0.012 + dp);
+  const std::string yaml = fmt::format(R"(name: plate_in_water
+description: "plate beside water"
+source: "test"
+dp: {}
+domain: {{min: [-1, -1], max: [1, 1]}}
+time: {{end: 1.0, cfl: 0.2}}
+gravity: [0, {}]
+materials:
+  water: {{type: fluid, rho: 1000, nu: 1.0e-6}}
+  plate: {{type: solid, rho: 2500, E: 1.0e6, nu: 0.0}}
+bodies:
+{}walls:
+  - {{name: tank, type: box, rectangle: {{min: [0, 0], max: [0.262, 0.3]}}, open_top: true}}
+)",
+                                       dp, -gravity, bodies);
+  return parse_case(yaml, "plate_in_water.yaml");
+}
+
+/// Hydrostatic pressure on the particles with PPE rows (fluid, walls, solid surface), as the PPE gives it.
+void set_hydrostatic(ParticleSet& p) {
+  auto& pressure = p.add_scalar_field("pressure");
+  const auto& surface = p.scalar_field("surface");
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const bool row = p.kind[i] == ParticleKind::fluid || p.kind[i] == ParticleKind::wall ||
+                     (p.kind[i] == ParticleKind::solid && surface[i] != 0);
+    pressure[i] = row ? rho * g * std::max<Real>(0, h - p.position[i][1]) : 0.0;
+  }
+}
+
+Vec total_force(const ParticleSet& p) {
+  Vec f = Vec::Zero();
+  const auto& load = p.vector_field("solid_load");
+  for (std::size_t i = 0; i < p.size(); ++i) f += load[i];
+  return f;
+}
+
+}  // namespace
+
+TEST(FsiInterface, HydrostaticForceOnAPlate) {
+  for (const bool left : {true, false}) {
+    const CaseSpec spec = plate_case(true, left);
+    Scene scene = build_scene(spec);
+    ParticleSet& p = scene.particles;
+    SolidSolver solid(spec, p);  // publishes the surface flag (eq. 48)
+    set_hydrostatic(p);
+    FsiInterface fsi(spec, p);
+    fsi.initialize();
+    fsi.prepare_fluid_boundary();
+    fsi.compute_load();
+    const Vec f = total_force(p);
+    const Real expected = rho * g * h * h / 2;  // 49.05 N per m of width
+    std::printf("  water %s: F = (%.3f, %.3f) N/m, expected |Fx| = %.3f N/m\n", left ? "left" : "right", f[0], f[1], expected);
+    EXPECT_NEAR(f[0], left ? expected : -expected, 0.03 * expected) << "the water pushes the plate away from it";
+    EXPECT_LT(std::abs(f[1]), 0.05 * expected);
+    ASSERT_EQ(fsi.bodies().size(), 1U);
+    EXPECT_NEAR(fsi.bodies()[0].force[0], f[0], 1e-9 * expected);
+    // Every wetted face particle carries about P dp, pushed away from the water.
+    const auto& load = p.vector_field("solid_load");
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const Real y = p.position[i][1];
+      if (p.kind[i] == ParticleKind::solid && load[i].squaredNorm() > 0 && y < h - 3 * dp && y > 3 * dp) {
+        EXPECT_NEAR(load[i][0], (left ? 1 : -1) * rho * g * (h - y) * dp, 0.03 * rho * g * h * dp);
+      }
+    }
+  }
+}
+
+TEST(FsiInterface, SeedNormalisationOverestimatesAFlatFace) {
+  // Eq. 50 normalised by n~ of eq. 51 (fluid side only) gives n0 / n~ ~ 3 times the pressure force.
+  const CaseSpec spec = plate_case(true, true);
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  SolidSolver solid(spec, p);
+  set_hydrostatic(p);
+  FsiOptions opt;
+  opt.normalisation = FsiOptions::Normalisation::seed;
+  FsiInterface fsi(spec, p, opt);
+  fsi.initialize();
+  fsi.compute_load();
+  const Real ratio = total_force(p)[0] / (rho * g * h * h / 2);
+  std::printf("  seed normalisation: F / (rho g h^2 / 2) = %.3f\n", ratio);
+  EXPECT_GT(ratio, 2.5);
+}
+
+TEST(FsiInterface, NoFluidNoForce) {
+  const CaseSpec spec = plate_case(false, true);
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  SolidSolver solid(spec, p);
+  auto& pressure = p.add_scalar_field("pressure");
+  for (std::size_t i = 0; i < p.size(); ++i) pressure[i] = 1000;  // pressure alone does not load the plate
+  FsiInterface fsi(spec, p);
+  fsi.initialize();
+  fsi.compute_load();
+  EXPECT_EQ(total_force(p), Vec::Zero());
+  EXPECT_EQ(fsi.bodies()[0].n_wetted, 0U);
+}
+
+TEST(FsiInterface, WorkOfTheLoadEqualsTheSolidsEnergyGain) {
+  const CaseSpec spec = plate_case(true, true, 0.0);  // no gravity on the solid: only the load works
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  SolidSolver solid(spec, p);
+  set_hydrostatic(p);
+  FsiInterface fsi(spec, p);
+  fsi.initialize();
+  fsi.compute_load();
+  const Real e0 = solid.diagnostics().total();
+  const Real dt_f = 2e-4;
+  const SubcycleChoice n = choose_subcycles(0, dt_f, solid.stable_dt());
+  for (int step = 0; step < 20; ++step) fsi.advance_solid(solid, step * dt_f, dt_f, n.n);
+  const Real gain = solid.diagnostics().total() - e0;
+  std::printf("  work %.6e J/m, energy gain %.6e J/m (%d sub-steps per step)\n", fsi.bodies()[0].work_total, gain, n.n);
+  EXPECT_GT(fsi.bodies()[0].work_total, 0);
+  EXPECT_NEAR(fsi.bodies()[0].work_total, gain, 0.02 * gain);
+}
+
+TEST(FsiInterface, Subcycles) {
+  EXPECT_EQ(choose_subcycles(0, 1e-4, 3e-5).n, 4);
+  EXPECT_FALSE(choose_subcycles(0, 1e-4, 3e-5).raised);
+  EXPECT_EQ(choose_subcycles(0, 9e-5, 3e-5).n, 3);  // exactly at the limit
+  EXPECT_EQ(choose_subcycles(10, 1e-4, 3e-5).n, 10);
+  const SubcycleChoice c = choose_subcycles(2, 1e-4, 3e-5);
+  EXPECT_EQ(c.n, 4);
+  EXPECT_TRUE(c.raised);
+  EXPECT_EQ(choose_subcycles(0, 1e-6, 3e-5).n, 1);
+}
