@@ -130,6 +130,15 @@ struct SolidSolver::Impl {
   void gather();
   void scatter();
   void compute_half_angles();
+  /// Relative displacement of bond b = (i, j) with the pair's mean rotation removed,
+  /// u_ij = r_ij - R((theta_i + theta_j)/2) r0_ij (eq. 25), from the half-angle cosines and sines.
+  Vec bond_displacement(const std::size_t i, const std::size_t j, const std::size_t b) const {
+    const Real c = ch[i] * ch[j] - sh[i] * sh[j];  // cos((theta_i + theta_j)/2)
+    const Real s = sh[i] * ch[j] + ch[i] * sh[j];  // sin((theta_i + theta_j)/2)
+    const Vec r0 = b_r0[b];
+    const Vec r = x[j] - x[i];
+    return Vec(r[0] - (c * r0[0] - s * r0[1]), r[1] - (s * r0[0] + c * r0[1]));
+  }
   /// Index of the bond (i, j) in the CSR, or npos.
   std::size_t find_bond(LocalIndex i, LocalIndex j) const;
   void contact_forces(std::size_t& n_contacts);
@@ -396,17 +405,13 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   const Real vd = volume * dim;
   for (std::size_t i = 0; i < ns; ++i) {
     const Vec xi = x[i];
-    const Real chi = ch[i], shi = sh[i];
     Vec fi = Vec::Zero();
     Real ti = 0, tri = 0;
     for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
       if (!b_intact[b]) continue;
       const auto j = static_cast<std::size_t>(b_j[b]);
-      const Real c = chi * ch[j] - shi * sh[j];  // cos((theta_i + theta_j)/2)
-      const Real s = shi * ch[j] + chi * sh[j];  // sin((theta_i + theta_j)/2)
-      const Vec r0 = b_r0[b];
       const Vec r = x[j] - xi;
-      const Vec u(r[0] - (c * r0[0] - s * r0[1]), r[1] - (s * r0[0] + c * r0[1]));
+      const Vec u = bond_displacement(i, j, b);
       const Real inv_r = 1 / std::sqrt(r.squaredNorm());
       const Real un = u.dot(r) * inv_r;  // |(u_ij)_n| with sign (eq. 26)
       if (un * b_inv_r0[b] > eps_max[i]) {  // eq. 47: the bond breaks for good
@@ -565,11 +570,8 @@ void SolidSolver::prepare_output(const Real t) {
     for (std::size_t b = m.b_off[i]; b < m.b_off[i + 1]; ++b) {
       if (!m.b_intact[b]) continue;
       const auto j = static_cast<std::size_t>(m.b_j[b]);
-      const Real c = m.ch[i] * m.ch[j] - m.sh[i] * m.sh[j];
-      const Real s = m.sh[i] * m.ch[j] + m.ch[i] * m.sh[j];
-      const Vec r0 = m.b_r0[b];
       const Vec r = m.x[j] - m.x[i];
-      const Vec u = r - Vec(c * r0[0] - s * r0[1], s * r0[0] + c * r0[1]);
+      const Vec u = m.bond_displacement(i, j, b);
       const Mat g = m.b_wr[b] * u * (r / r.norm()).transpose();
       grad[i] += g;
       grad[j] += g;  // u_ji (x) e_ji = u_ij (x) e_ij
@@ -627,11 +629,8 @@ SolidDiagnostics SolidSolver::diagnostics() const {
     for (std::size_t b = m.b_off[i]; b < m.b_off[i + 1]; ++b) {
       if (!m.b_intact[b]) continue;
       const auto j = static_cast<std::size_t>(m.b_j[b]);
-      const Real c = m.ch[i] * m.ch[j] - m.sh[i] * m.sh[j];
-      const Real s = m.sh[i] * m.ch[j] + m.ch[i] * m.sh[j];
-      const Vec r0 = m.b_r0[b];
       const Vec r = m.x[j] - m.x[i];
-      const Vec u = r - Vec(c * r0[0] - s * r0[1], s * r0[0] + c * r0[1]);
+      const Vec u = m.bond_displacement(i, j, b);
       const Real un = u.dot(r) / r.norm();
       tr[i] += m.b_wr[b] * un;
       tr[j] += m.b_wr[b] * un;
