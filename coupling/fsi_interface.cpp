@@ -139,6 +139,7 @@ void FsiInterface::compute_load() {
   const Real volume = std::pow(dp_, dim);
   for (std::size_t i = 0; i < p_.size(); ++i) {
     if (p_.kind[i] != ParticleKind::solid || flag[i] == 0) continue;
+    if (opt_.exclude_clamped && p_.clamped[i]) continue;
     const auto it = n0_solid_.find(p_.global_id[i]);
     if (it == n0_solid_.end()) throw std::logic_error("FsiInterface: a solid particle appeared after initialize()");
     const Vec xi = p_.position[i];
@@ -158,7 +159,8 @@ void FsiInterface::compute_load() {
         const Real w = re_ / std::sqrt(r2) - 1.0;
         n_total += w;
         const bool fluid = p_.kind[j] == ParticleKind::fluid;
-        if (!fluid && !(p_.kind[j] == ParticleKind::solid && flag[j] != 0)) continue;  // j*: fluid, solid surface
+        if (!fluid && !(p_.kind[j] == ParticleKind::solid && flag[j] != 0 && !(opt_.exclude_clamped && p_.clamped[j])))
+          continue;  // j*: fluid, solid surface (not clamped)
         wet = wet || fluid;
         sum += (0.5 * (pi + pressure[j]) * w / r2) * rij;
       }
@@ -166,7 +168,11 @@ void FsiInterface::compute_load() {
     const Real n_tilde = n_total - it->second;  // eq. 51
     if (!wet || !(n_tilde > 0)) continue;
     const Real n_norm = opt_.normalisation == FsiOptions::Normalisation::seed ? n_tilde : n0_;
-    const Vec f = -volume * (2.0 * dim / n_norm) * sum;  // eq. 50 times the particle volume, as -grad P
+    Vec f = -volume * (2.0 * dim / n_norm) * sum;  // eq. 50 times the particle volume, as -grad P
+    if (opt_.load_relaxation < 1) {
+      const auto prev = prev_load_.find(p_.global_id[i]);
+      if (prev != prev_load_.end()) f = opt_.load_relaxation * f + (1 - opt_.load_relaxation) * prev->second;
+    }
     load[i] = f;
     loaded_.push_back(static_cast<LocalIndex>(i));
     const int slot = body_slot_[p_.body[i]];
@@ -174,6 +180,10 @@ void FsiInterface::compute_load() {
       bodies_[static_cast<std::size_t>(slot)].force += f;
       ++bodies_[static_cast<std::size_t>(slot)].n_wetted;
     }
+  }
+  if (opt_.load_relaxation < 1) {  // a particle that falls dry starts afresh
+    prev_load_.clear();
+    for (const LocalIndex li : loaded_) prev_load_[p_.global_id[static_cast<std::size_t>(li)]] = load[static_cast<std::size_t>(li)];
   }
 }
 

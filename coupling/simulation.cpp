@@ -1,6 +1,7 @@
 // The run loop: fluid step, solid sub-steps, state checks (non-finite or runaway velocity, solid leaving
 // the domain), frames and probes, progress line and JSON-lines run log. With both fluid and solid the
-// steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp).
+// steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the solid's bond
+// damping and the load relaxation of the case's coupling map.
 #include "coupling/simulation.hpp"
 
 #include "coupling/fsi_interface.hpp"
@@ -75,7 +76,10 @@ class RunLoop {
     if (has_solid) solid_ = std::make_unique<SolidSolver>(spec, p_);
     if (solid_ && rank_ == 0) solid_->set_output_directory(settings.output_dir);  // fragments.csv
     if (fluid_ && solid_) {
-      coupling_ = std::make_unique<FsiInterface>(spec, p_);
+      FsiOptions fo;
+      fo.load_relaxation = spec.coupling.load_relaxation;
+      solid_->set_damping(spec.coupling.solid_damping);
+      coupling_ = std::make_unique<FsiInterface>(spec, p_, fo);
       coupling_->initialize();
       if (rank_ == 0) coupling_->open_csv(settings.output_dir + "/interface.csv");
     }

@@ -104,6 +104,8 @@ struct TimeSpec {
 
 struct CouplingSpec {
   int subcycles = 1;            ///< solid sub-steps per fluid step; 0 means "auto"
+  Real solid_damping = 0.5;     ///< Kelvin-Voigt bond damping of the solid, eta = beta dp / c_p (SolidSolver::set_damping)
+  Real load_relaxation = 1.0;   ///< FsiOptions::load_relaxation
 };
 
 struct FluidNumerics {

@@ -772,6 +772,10 @@ void read_coupling(MapReader r, CouplingSpec& c) {
                       ? 0
                       : to_int(r.source(), *f, [](const long long n) { return n >= 1; }, form);
   }
+  c.solid_damping = r.number("solid_damping", c.solid_damping, [](Real x) { return x >= 0; },
+                             "a number >= 0 (solid bond damping time in units of dp / c_p)");
+  c.load_relaxation = r.number("load_relaxation", c.load_relaxation, [](Real x) { return x > 0 && x <= 1; },
+                               "a number in (0, 1] (under-relaxation of the interface load in time)");
   r.finish();
 }
 
@@ -920,7 +924,7 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   check_geometry(src, spec, geometry, top.at("dp"));
 
   read_tank_motion(top.optional_map("tank_motion", "a map {type: none | sine_roll | table, ...}"), base_dir, spec);
-  read_coupling(top.optional_map("coupling", "a map {subcycles}"), spec.coupling);
+  read_coupling(top.optional_map("coupling", "a map {subcycles, solid_damping, load_relaxation}"), spec.coupling);
   read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.fluid);
   read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid);
   read_solid_loads(top, spec);

@@ -80,6 +80,7 @@ struct SolidSolver::Impl {
   Real k_contact = 0;     ///< contact spring [N/m per unit thickness]
   Real dt_factor = 0.2;
   Real c_p_max = 0;
+  Real damping_time = 0;    ///< Kelvin-Voigt retardation time eta of the bonds [s] (0: none)
   bool plane_stress = false;
   Vec gravity = Vec::Zero();
   TankMotion tank;          ///< prescribed tank roll; clamped particles follow it
@@ -427,7 +428,10 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
       const Real wr = b_wr[b];
       tri += wr * un;
       tr[j] += wr * un;
-      const Vec fe = b_k[b] * u;  // sigma_ij + tau_ij term, force on i
+      Vec fe = b_k[b] * u;  // sigma_ij + tau_ij term, force on i
+      // Kelvin-Voigt bond damping: eta times the bond's normal stretch rate, same stiffness; rigid
+      // translation and rotation give no normal stretch rate and are not damped.
+      if (damping_time > 0) fe += (b_k[b] * damping_time * (v[j] - v[i]).dot(r) * inv_r * inv_r) * r;
       fi += fe;
       force[j] -= fe;
       const Real tq = 0.5 * cross(r, fe);  // -1/2 M_ij, M_ij = -r_ij x F_ij (eq. 42-43), same for j
@@ -543,6 +547,13 @@ SolidSolver::SolidSolver(const CaseSpec& spec, ParticleSet& particles) : impl_(s
   impl_->compute_fragments();
 }
 SolidSolver::~SolidSolver() = default;
+
+void SolidSolver::set_damping(const Real beta) {
+  if (!(beta >= 0)) throw std::invalid_argument("SolidSolver::set_damping: beta must be >= 0");
+  impl_->damping_time = impl_->c_p_max > 0 ? beta * impl_->dp / impl_->c_p_max : 0;
+}
+
+Real SolidSolver::damping_time() const { return impl_->damping_time; }
 
 Real SolidSolver::stable_dt() const {
   if (!(impl_->c_p_max > 0)) throw std::logic_error("SolidSolver::stable_dt: no solid particles");

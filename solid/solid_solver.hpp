@@ -8,6 +8,9 @@
 // eq. 41-44, symplectic Euler eq. 39-40 and 45-46, brittle fracture eq. 47, surface particles eq. 48,
 // contact of unbonded surface particles §4.4. Lame constants from E and nu by eq. 4 (plane strain) or
 // the plane-stress reduction, or from the wave speeds vp, vs (seed 000 §4).
+// Optional Kelvin-Voigt bond damping (set_damping; off unless called, the coupled run loop calls it with
+// coupling.solid_damping): each bond adds k eta (e . (v_j - v_i)) e to its elastic force, with k the
+// bond's stiffness and e its direction, so the damping ratio of a mode is eta omega / 2.
 #pragma once
 
 #include "core/particles.hpp"
@@ -48,6 +51,12 @@ class SolidSolver {
   /// Stable explicit time step of the solid: dt_factor * dp / c_p (c_p the largest P-wave speed,
   /// sqrt((lambda + 2 mu) / rho)); see docs/validation.md for the measured stability limit.
   Real stable_dt() const;
+  /// Kelvin-Voigt damping of the bonds: sigma = E (eps + eta d eps/dt) on the bonds' normal stretch, with
+  /// the retardation time eta = beta dp / c_p. A mode of angular frequency omega gets the damping ratio
+  /// eta omega / 2: beta = 0.5 gives ~0.5 at the particle scale (omega ~ 2 c_p / dp)
+  /// and eta omega_1 / 2 ~ 1e-3 to a plate's first bending mode (docs/validation.md, ## Coupling).
+  void set_damping(Real beta);
+  Real damping_time() const;  ///< eta [s]
   /// One explicit step from t to t + dt (seed 004 eq. 25-48).
   SolidStepReport advance(Real t, Real dt);
   /// Called by the driver just before an output frame: refresh derived fields (stress, displacement,

@@ -182,6 +182,8 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_TRUE(c.probes.empty());
   EXPECT_EQ(c.tank_motion.type, TankMotionType::none);
   EXPECT_EQ(c.coupling.subcycles, 1);
+  EXPECT_DOUBLE_EQ(c.coupling.solid_damping, 0.5);
+  EXPECT_DOUBLE_EQ(c.coupling.load_relaxation, 1.0);
   EXPECT_EQ(c.fluid.solver, "cg");
   EXPECT_EQ(c.fluid.preconditioner, "muelu");
   EXPECT_EQ(c.fluid.preconditioner_rebuild_every, 1);
@@ -331,6 +333,10 @@ TEST(CaseFileErrors, OutOfRangeValues) {
               HasSubstr("coupling.subcycles = 0: expected a positive integer or auto"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: 2.5")),
               HasSubstr("coupling.subcycles = 2.5: expected a positive integer or auto"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, solid_damping: -1")),
+              HasSubstr("coupling.solid_damping = -1: expected a number >= 0"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, load_relaxation: 0")),
+              HasSubstr("coupling.load_relaxation = 0: expected a number in (0, 1]"));
   EXPECT_THAT(error_of(valid_with("solver: gmres", "solver: bicgstab")),
               HasSubstr("fluid.solver = bicgstab: expected one of: cg, gmres"));
   EXPECT_THAT(error_of(valid_with("open_top: true", "open_top: maybe")),
@@ -497,6 +503,7 @@ TEST(CaseFileOverrides, ValuesListsIndexesNames) {
   EXPECT_THAT(c.resolved_yaml, HasSubstr("rho: 998"));
 
   EXPECT_EQ(parse_case(minimal_case, file_name, {"coupling.subcycles=auto"}).coupling.subcycles, 0);
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name, {"coupling.solid_damping=2"}).coupling.solid_damping, 2.0);
   EXPECT_EQ(parse_case(valid_text(), file_name, {"coupling.subcycles=7"}).coupling.subcycles, 7);
   // A later override wins; ~ removes an optional key.
   const CaseSpec d = parse_case(valid_text(), file_name, {"dp=0.01", "dp=0.002", "time.cfl=~", "time.dt_max=~", "time.dt=1e-4"});
