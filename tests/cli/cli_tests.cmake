@@ -39,3 +39,10 @@ mpsfsi_cli_test(fluid_leaves_domain 0 "fluid particles left the domain and were 
   --set gravity=[0,9.81] --set "domain={min: [-0.05, -0.05], max: [0.25, 0.32]}")
 mpsfsi_cli_test(existing_output_refused 2 "exists and is not empty.*--overwrite"
   run ${db} --quiet --output ${PROJECT_SOURCE_DIR}/cases --end-time 0.01)
+
+# Every shipped case runs for a short time (label cases).
+add_test(NAME run_all_shipped_cases
+         COMMAND ${CMAKE_COMMAND} -DMPSFSI=$<TARGET_FILE:mpsfsi> -DCASES_DIR=${PROJECT_SOURCE_DIR}/cases
+                 -DWORK=${CMAKE_CURRENT_BINARY_DIR}/case_runs -DEND=2e-4
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/run_all_cases.cmake)
+set_tests_properties(run_all_shipped_cases PROPERTIES LABELS cases TIMEOUT 600)

@@ -1,0 +1,28 @@
+# Runs every case file shipped in cases/ (found when the test runs) for a short simulated time:
+# `mpsfsi run CASE --end-time T` must finish with exit code 0 and write a .pvd series.
+# Usage: cmake -DMPSFSI=... -DCASES_DIR=... -DWORK=... -DEND=... -P run_all_cases.cmake
+file(GLOB case_files "${CASES_DIR}/*.yaml")
+list(LENGTH case_files n)
+if(n EQUAL 0)
+  message(FATAL_ERROR "no case files in ${CASES_DIR}")
+endif()
+set(failed "")
+foreach(f IN LISTS case_files)
+  get_filename_component(name ${f} NAME_WE)
+  set(out ${WORK}/${name})
+  file(REMOVE_RECURSE ${out})
+  string(TIMESTAMP t0 "%s")
+  execute_process(COMMAND ${MPSFSI} run ${f} --quiet --output ${out} --end-time ${END}
+                  RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
+  string(TIMESTAMP t1 "%s")
+  math(EXPR dt "${t1} - ${t0}")
+  if(NOT code EQUAL 0 OR NOT EXISTS ${out}/particles.pvd)
+    list(APPEND failed "${f}: exit ${code}\n${stdout}${stderr}")
+  else()
+    message(STATUS "ok (${dt} s): ${f}")
+  endif()
+endforeach()
+if(failed)
+  message(FATAL_ERROR "mpsfsi run failed for:\n${failed}")
+endif()
+message(STATUS "all ${n} shipped cases ran to t = ${END} s")
