@@ -1,8 +1,8 @@
 # Command-line tests of the mpsfsi program (label unit): every shipped case passes `mpsfsi check`;
 # each kind of bad input gives a message naming file, line, key and expected form, and exit code 2.
 add_test(NAME check_all_shipped_cases
-         COMMAND ${CMAKE_COMMAND} -DMPSFSI=$<TARGET_FILE:mpsfsi> -DCASES_DIR=${PROJECT_SOURCE_DIR}/cases
-                 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/check_all_cases.cmake)
+         COMMAND ${CMAKE_COMMAND} -DMODE=check -DMPSFSI=$<TARGET_FILE:mpsfsi> -DCASES_DIR=${PROJECT_SOURCE_DIR}/cases
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/all_cases.cmake)
 set_tests_properties(check_all_shipped_cases PROPERTIES LABELS unit)
 
 function(mpsfsi_cli_test name code regex)
@@ -42,7 +42,7 @@ mpsfsi_cli_test(existing_output_refused 2 "exists and is not empty.*--overwrite"
 
 # Every shipped case runs for a short time (label cases).
 add_test(NAME run_all_shipped_cases
-         COMMAND ${CMAKE_COMMAND} -DMPSFSI=$<TARGET_FILE:mpsfsi> -DCASES_DIR=${PROJECT_SOURCE_DIR}/cases
+         COMMAND ${CMAKE_COMMAND} -DMODE=run -DMPSFSI=$<TARGET_FILE:mpsfsi> -DCASES_DIR=${PROJECT_SOURCE_DIR}/cases
                  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/case_runs -DEND=2e-4
-                 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/run_all_cases.cmake)
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/all_cases.cmake)
 set_tests_properties(run_all_shipped_cases PROPERTIES LABELS cases TIMEOUT 600)
