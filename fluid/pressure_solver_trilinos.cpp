@@ -313,6 +313,14 @@ class TrilinosPressureSolver final : public PressureSolver {
     Teuchos::Array<Scalar> rnorm(1);
     r_->norm2(rnorm());
     result.residual = rnorm[0] / bnorm[0];
+    return finish(sys, x, result, ret, t0);
+  }
+
+ private:
+  /// End of every solve: converged means Belos converged and the true residual is within the tolerance
+  /// (with a factor 10 for the residual's different scaling); the solution goes back to all ranks.
+  PressureSolveResult finish(const LocalRows& sys, std::vector<Real>& x, PressureSolveResult& result,
+                             const Belos::ReturnType ret, const Clock::time_point t0) {
     result.converged = ret == Belos::Converged && std::isfinite(result.residual) &&
                        result.residual <= 10 * settings_.tolerance;
     gather(sys, x);
@@ -321,7 +329,6 @@ class TrilinosPressureSolver final : public PressureSolver {
     return result;
   }
 
- private:
   /// CG on the SGS-preconditioned system by Eisenstat's trick (EisenstatSystem); the true residual of
   /// A x = b decides: if it is above the tolerance, the solve continues from where it stopped with a
   /// tighter tolerance on the transformed residual (at most twice).
@@ -374,12 +381,7 @@ class TrilinosPressureSolver final : public PressureSolver {
       belos_list_->set("Convergence Tolerance", settings_.tolerance);
       belos_->setParameters(belos_list_);
     }
-    result.converged = ret == Belos::Converged && std::isfinite(result.residual) &&
-                       result.residual <= 10 * settings_.tolerance;
-    gather(sys, x);
-    result.t_solve = seconds_since(t0);
-    ++n_solves_;
-    return result;
+    return finish(sys, x, result, ret, t0);
   }
 
   /// Points the EisenstatSystem at the new matrix's local arrays and finds L, D and U in each row.

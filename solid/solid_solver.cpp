@@ -140,6 +140,17 @@ struct SolidSolver::Impl {
     const Vec r = x[j] - x[i];
     return Vec(r[0] - (c * r0[0] - s * r0[1]), r[1] - (s * r0[0] + c * r0[1]));
   }
+  /// Call f(i, j, b, r_ij, u_ij) for every intact bond b = (i, j), each pair once (not the hot step loop,
+  /// which also breaks bonds).
+  template <class F>
+  void for_each_intact_bond(F&& f) const {
+    for (std::size_t i = 0; i < n(); ++i)
+      for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+        if (!b_intact[b]) continue;
+        const auto j = static_cast<std::size_t>(b_j[b]);
+        f(i, j, b, Vec(x[j] - x[i]), bond_displacement(i, j, b));
+      }
+  }
   /// Index of the bond (i, j) in the CSR, or npos.
   std::size_t find_bond(LocalIndex i, LocalIndex j) const;
   void contact_forces(std::size_t& n_contacts);
@@ -577,17 +588,11 @@ void SolidSolver::prepare_output(const Real t) {
   const std::size_t ns = m.n();
   // Strain tensor eps_i = sym(d/n0_i sum w0/|r0| u_ij (x) e_ij): its trace is eq. 30.
   std::vector<Mat> grad(ns, Mat::Zero());
-  for (std::size_t i = 0; i < ns; ++i) {
-    for (std::size_t b = m.b_off[i]; b < m.b_off[i + 1]; ++b) {
-      if (!m.b_intact[b]) continue;
-      const auto j = static_cast<std::size_t>(m.b_j[b]);
-      const Vec r = m.x[j] - m.x[i];
-      const Vec u = m.bond_displacement(i, j, b);
-      const Mat g = m.b_wr[b] * u * (r / r.norm()).transpose();
-      grad[i] += g;
-      grad[j] += g;  // u_ji (x) e_ji = u_ij (x) e_ij
-    }
-  }
+  m.for_each_intact_bond([&](std::size_t i, std::size_t j, std::size_t b, const Vec& r, const Vec& u) {
+    const Mat g = m.b_wr[b] * u * (r / r.norm()).transpose();
+    grad[i] += g;
+    grad[j] += g;  // u_ji (x) e_ji = u_ij (x) e_ij
+  });
   m.compute_fragments();
   for (std::size_t k = 0; k < ns; ++k) {
     const auto i = static_cast<std::size_t>(m.pid[k]);
@@ -636,18 +641,12 @@ SolidDiagnostics SolidSolver::diagnostics() const {
   SolidDiagnostics d;
   const std::size_t ns = m.n();
   std::vector<Real> tr(ns, 0);
-  for (std::size_t i = 0; i < ns; ++i) {
-    for (std::size_t b = m.b_off[i]; b < m.b_off[i + 1]; ++b) {
-      if (!m.b_intact[b]) continue;
-      const auto j = static_cast<std::size_t>(m.b_j[b]);
-      const Vec r = m.x[j] - m.x[i];
-      const Vec u = m.bond_displacement(i, j, b);
-      const Real un = u.dot(r) / r.norm();
-      tr[i] += m.b_wr[b] * un;
-      tr[j] += m.b_wr[b] * un;
-      d.strain += 0.5 * m.b_k[b] * u.squaredNorm();
-    }
-  }
+  m.for_each_intact_bond([&](std::size_t i, std::size_t j, std::size_t b, const Vec& r, const Vec& u) {
+    const Real un = u.dot(r) / r.norm();
+    tr[i] += m.b_wr[b] * un;
+    tr[j] += m.b_wr[b] * un;
+    d.strain += 0.5 * m.b_k[b] * u.squaredNorm();
+  });
   for (std::size_t k = 0; k < ns; ++k) {
     const Real t = dim * m.inv_n0[k] * tr[k];
     d.strain += 0.5 * m.volume * m.lambda[k] * t * t;
