@@ -87,6 +87,7 @@ struct FluidSolver::Impl {
     ps.muelu_rebuild_every = opt.muelu_rebuild_every;
     solver = make_pressure_solver(ps, comm);
     tolerance = ps.tolerance;
+    density_tolerance = spec.fluid.density_tolerance;
     preconditioner = ps.preconditioner;
 
     p.add_scalar_field("pressure", 0.0);
@@ -241,6 +242,8 @@ struct FluidSolver::Impl {
     }
     const std::size_t n_rows = particle_of_row.size();
     sys.n_global_rows = n_rows;
+    // ||r||_2 <= eta rho / dt^2 sqrt(n_rows): RMS over the rows of r dt^2 / rho below eta.
+    sys.absolute_tolerance = density_tolerance * rho / (dt * dt) * std::sqrt(static_cast<Real>(n_rows));
     sys.rows = solver->owned_rows(n_rows);
     sys.row_ptr.resize(sys.rows.size() + 1);
     sys.rhs.resize(sys.rows.size());
@@ -391,6 +394,7 @@ struct FluidSolver::Impl {
   Rect domain;
   Real rho = 1000, nu = 0, c = 20, kappa = 1;
   Real tolerance = 1e-8;
+  Real density_tolerance = 0;  ///< fluid.density_tolerance: absolute stop, RMS of r dt^2 / rho
   std::string preconditioner;
   std::unique_ptr<PressureSolver> solver;
   std::unordered_map<GlobalId, Vec> wall_reference;
@@ -486,7 +490,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
     throw std::runtime_error(fmt::format(
         "the pressure solve did not converge: {} iterations, true relative residual {:.3e} > tolerance {:.1e} "
         "({} rows, preconditioner '{}'); raise fluid.max_iterations, use another fluid.preconditioner or reduce dt",
-        res.iterations, res.residual, m.tolerance, report.n_rows, m.preconditioner));
+        res.iterations, res.residual, res.tolerance, report.n_rows, m.preconditioner));
 
   t0 = Clock::now();
   m.correct(dt);

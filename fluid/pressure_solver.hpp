@@ -59,11 +59,15 @@ struct LocalRows {
   std::vector<GlobalId> col;          ///< global column (row) ids
   std::vector<Real> value;
   std::vector<Real> rhs;              ///< size rows.size()
+  /// The solve may also stop when ||b - Ax||_2 (over all ranks) is at most this, whatever the relative
+  /// tolerance says (0: off). The fluid sets it from fluid.density_tolerance.
+  Real absolute_tolerance = 0;
 };
 
 struct PressureSolveResult {
   int iterations = 0;
   Real residual = 0;          ///< true relative residual ||b - Ax|| / ||b|| (0 if b = 0)
+  Real tolerance = 0;         ///< relative tolerance this solve used: max(settings, absolute / ||b||)
   bool converged = true;
   double t_matrix = 0;        ///< building the distributed matrix [s]
   double t_setup = 0;         ///< preconditioner setup [s]

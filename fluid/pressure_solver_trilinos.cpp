@@ -227,6 +227,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     Belos::SolverFactory<Scalar, MV, OP> factory;
     belos_ = factory.create(manager, params);
     belos_list_ = params;
+    belos_tolerance_ = s.tolerance;
     eisenstat_ = (s.preconditioner == "sgs" || s.preconditioner == "ssor") && !sgs_ifpack2_;
   }
 
@@ -286,6 +287,12 @@ class TrilinosPressureSolver final : public PressureSolver {
       result.t_solve = seconds_since(t0);
       return result;
     }
+    // This solve's relative tolerance: the settings', or the absolute one where that is looser (capped at
+    // 0.1 so that a nearly zero right-hand side still gets a solve).
+    result.tolerance = settings_.tolerance;
+    if (sys.absolute_tolerance > 0)
+      result.tolerance = std::max(result.tolerance, std::min<Scalar>(0.1, sys.absolute_tolerance / bnorm[0]));
+    set_belos_tolerance(result.tolerance);
     if (eisenstat_) return solve_eisenstat(sys, x, result, bnorm[0], t0);
     RCP<OP> prec = setup_preconditioner();
     result.t_setup = seconds_since(t0);
@@ -322,7 +329,7 @@ class TrilinosPressureSolver final : public PressureSolver {
   PressureSolveResult finish(const LocalRows& sys, std::vector<Real>& x, PressureSolveResult& result,
                              const Belos::ReturnType ret, const Clock::time_point t0) {
     result.converged = ret == Belos::Converged && std::isfinite(result.residual) &&
-                       result.residual <= 10 * settings_.tolerance;
+                       result.residual <= 10 * result.tolerance;
     gather(sys, x);
     result.t_solve = seconds_since(t0);
     ++n_solves_;
@@ -354,7 +361,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     auto problem = rcp(new Belos::LinearProblem<Scalar, MV, OP>(eis_, y_, bh_));
     problem->setProblem();
     belos_->setProblem(problem);
-    Scalar tol = settings_.tolerance;
+    Scalar tol = result.tolerance;
     Belos::ReturnType ret = Belos::Unconverged;
     for (int round = 0; round < 3; ++round) {
       ret = belos_->solve();
@@ -371,17 +378,20 @@ class TrilinosPressureSolver final : public PressureSolver {
       Teuchos::Array<Scalar> rnorm(1);
       r_->norm2(rnorm());
       result.residual = rnorm[0] / bnorm;
-      if (!(result.residual > settings_.tolerance) || ret != Belos::Converged || round == 2) break;
-      tol *= 0.5 * settings_.tolerance / result.residual;
-      belos_list_->set("Convergence Tolerance", tol);
-      belos_->setParameters(belos_list_);
+      if (!(result.residual > result.tolerance) || ret != Belos::Converged || round == 2) break;
+      tol *= 0.5 * result.tolerance / result.residual;
+      set_belos_tolerance(tol);
       problem->setProblem();  // continue from the current y
     }
-    if (tol != settings_.tolerance) {
-      belos_list_->set("Convergence Tolerance", settings_.tolerance);
-      belos_->setParameters(belos_list_);
-    }
     return finish(sys, x, result, ret, t0);
+  }
+
+  /// Belos' convergence tolerance for the next solve (parameters passed again only when it changes).
+  void set_belos_tolerance(const Scalar tol) {
+    if (tol == belos_tolerance_) return;
+    belos_tolerance_ = tol;
+    belos_list_->set("Convergence Tolerance", tol);
+    belos_->setParameters(belos_list_);
   }
 
   /// Points the EisenstatSystem at the new matrix's local arrays and finds L, D and U in each row.
@@ -605,6 +615,7 @@ class TrilinosPressureSolver final : public PressureSolver {
   RCP<EisenstatSystem> eis_;
   RCP<MV> bh_, y_;
   RCP<Teuchos::ParameterList> belos_list_;
+  Scalar belos_tolerance_ = 0;  ///< the tolerance belos_ was last given
   int rebuild_every_ = 1;
   std::size_t solves_since_setup_ = 0;
   int iterations_after_setup_ = 0;

@@ -790,6 +790,9 @@ void read_fluid_numerics(MapReader r, FluidNumerics& n) {
   n.solver = r.choice("solver", n.solver, {"cg", "gmres"});
   n.preconditioner = r.choice("preconditioner", n.preconditioner, {"muelu", "chebyshev", "ilu", "jacobi", "sgs", "ssor", "none"});
   n.tolerance = r.number("tolerance", n.tolerance, in_open(0, 1), "a number in (0, 1) (relative residual of the pressure solve)");
+  n.density_tolerance = r.number("density_tolerance", n.density_tolerance, [](Real x) { return x >= 0 && x < 1; },
+                                 "a number in [0, 1) (RMS density error r dt^2 / rho at which the pressure solve "
+                                 "may stop; 0: off)");
   n.max_iterations = r.integer("max_iterations", n.max_iterations, [](const long long k) { return k >= 1; },
                                "a positive integer (iterations of the pressure solve)");
   n.preconditioner_rebuild_every =

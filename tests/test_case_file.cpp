@@ -187,6 +187,7 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_EQ(c.fluid.solver, "cg");
   EXPECT_EQ(c.fluid.preconditioner, "muelu");
   EXPECT_EQ(c.fluid.preconditioner_rebuild_every, 1);
+  EXPECT_DOUBLE_EQ(c.fluid.density_tolerance, 1e-6);
   EXPECT_DOUBLE_EQ(c.fluid.re_laplacian, 4.0);
   EXPECT_DOUBLE_EQ(c.output.interval, 0.01);
   EXPECT_TRUE(c.output.fields.empty());
@@ -339,6 +340,8 @@ TEST(CaseFileErrors, OutOfRangeValues) {
               HasSubstr("coupling.load_relaxation = 0: expected a number in (0, 1]"));
   EXPECT_THAT(error_of(valid_with("solver: gmres", "solver: bicgstab")),
               HasSubstr("fluid.solver = bicgstab: expected one of: cg, gmres"));
+  EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  density_tolerance: -1e-6")),
+              HasSubstr("fluid.density_tolerance = -1e-6: expected a number in [0, 1)"));
   EXPECT_THAT(error_of(valid_with("open_top: true", "open_top: maybe")),
               HasSubstr("walls[0].open_top = maybe: expected true or false"));
   EXPECT_THAT(error_of(valid_with("max: [0.2, 0.4]", "max: [0.2, -0.4]")),

@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
     const std::string preconditioner = argc > 1 ? argv[1] : "muelu";
     const Real tol = 1e-10;
     const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/dam_break.yaml",
-                                    {"fluid.preconditioner=" + preconditioner, "fluid.tolerance=1e-10"});
+                                    {"fluid.preconditioner=" + preconditioner, "fluid.tolerance=1e-10",
+                                     "fluid.density_tolerance=0"});
     Scene serial_scene = build_scene(spec);
     Scene dist_scene = build_scene(spec);
     FluidSolver serial(spec, serial_scene.particles, MPI_COMM_SELF);

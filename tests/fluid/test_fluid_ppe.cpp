@@ -129,12 +129,11 @@ TEST(FluidFreeSurface, DoubleCheckFlagsTheTopRowOnly) {
 // is recomputed here from the CRS arrays.
 class PressureSolve : public ::testing::TestWithParam<std::pair<const char*, const char*>> {};
 
-TEST_P(PressureSolve, TrueResidualBelowTolerance) {
-  PressureSolverSettings settings;
-  settings.solver = GetParam().first;
-  settings.preconditioner = GetParam().second;
-  settings.tolerance = 1e-8;
-  settings.max_iterations = 2000;
+namespace {
+/// Solves the shifted 5-point system below with `settings` and `absolute_tolerance`; returns the
+/// solver's result and the true ||b - Ax|| / ||b|| recomputed from the CRS arrays.
+std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSettings& settings,
+                                                         const Real absolute_tolerance, Real* b_norm = nullptr) {
   auto solver = make_pressure_solver(settings, MPI_COMM_WORLD);
   const int m = 40;
   const std::size_t n = static_cast<std::size_t>(m * m);
@@ -161,10 +160,9 @@ TEST_P(PressureSolve, TrueResidualBelowTolerance) {
     s.row_ptr.push_back(s.col.size());
     s.rhs.push_back(rhs_all[r]);
   }
+  s.absolute_tolerance = absolute_tolerance;
   std::vector<Real> x(n, 0.0);
   const PressureSolveResult res = solver->solve(s, x);
-  EXPECT_TRUE(res.converged);
-  EXPECT_GT(res.iterations, 0);
   // True residual of the whole system from the gathered solution (identical on every rank).
   Real r2 = 0, b2 = 0;
   for (std::size_t r = 0; r < s.rows.size(); ++r) {
@@ -175,9 +173,45 @@ TEST_P(PressureSolve, TrueResidualBelowTolerance) {
   }
   Real sums[2] = {r2, b2}, global[2] = {0, 0};
   MPI_Allreduce(sums, global, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  const Real true_residual = std::sqrt(global[0] / global[1]);
+  if (b_norm) *b_norm = std::sqrt(global[1]);
+  return {res, std::sqrt(global[0] / global[1])};
+}
+}  // namespace
+
+TEST_P(PressureSolve, TrueResidualBelowTolerance) {
+  PressureSolverSettings settings;
+  settings.solver = GetParam().first;
+  settings.preconditioner = GetParam().second;
+  settings.tolerance = 1e-8;
+  settings.max_iterations = 2000;
+  const auto [res, true_residual] = solve_model_problem(settings, 0);
+  EXPECT_TRUE(res.converged);
+  EXPECT_GT(res.iterations, 0);
+  EXPECT_EQ(res.tolerance, settings.tolerance);
   EXPECT_LT(true_residual, 10 * settings.tolerance);
   EXPECT_NEAR(res.residual, true_residual, 1e-3 * true_residual + 1e-14);
+}
+
+// The absolute stop (fluid.density_tolerance): a looser absolute bound stops earlier, with the true
+// residual below it; a tighter one than the relative tolerance changes nothing.
+TEST_P(PressureSolve, AbsoluteToleranceStopsEarlier) {
+  PressureSolverSettings settings;
+  settings.solver = GetParam().first;
+  settings.preconditioner = GetParam().second;
+  settings.tolerance = 1e-10;
+  settings.max_iterations = 2000;
+  Real b_norm = 0;
+  const auto [strict, strict_residual] = solve_model_problem(settings, 0, &b_norm);
+  const Real absolute = 1e-4 * b_norm;
+  const auto [loose, loose_residual] = solve_model_problem(settings, absolute);
+  EXPECT_TRUE(loose.converged);
+  EXPECT_DOUBLE_EQ(loose.tolerance, 1e-4);
+  EXPECT_LT(loose.iterations, strict.iterations);
+  EXPECT_LT(loose_residual * b_norm, 10 * absolute);
+  EXPECT_GT(loose_residual, strict_residual);
+  const auto [tight, tight_residual] = solve_model_problem(settings, 1e-3 * settings.tolerance * b_norm);
+  EXPECT_EQ(tight.iterations, strict.iterations);
+  EXPECT_EQ(tight.tolerance, settings.tolerance);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllChoices, PressureSolve,
