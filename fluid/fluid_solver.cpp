@@ -160,18 +160,22 @@ struct FluidSolver::Impl {
     const std::size_t n = p.size();
     near.radius = re_g;
     near.offset.resize(n + 1);
-    near.index.clear();
+    near.index.resize(nl.n_pairs());  // an upper bound; trimmed below
     near.offset[0] = 0;
+    std::size_t m = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const Vec xi = p.position[i];
       if (roles[i] != Role::none)
         for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
           const LocalIndex j = nl.index[k];
-          if (roles[static_cast<std::size_t>(j)] == Role::none) continue;
-          if (in_support((p.position[static_cast<std::size_t>(j)] - xi).squaredNorm(), re_g)) near.index.push_back(j);
+          const bool keep = roles[static_cast<std::size_t>(j)] != Role::none &&
+                            in_support((p.position[static_cast<std::size_t>(j)] - xi).squaredNorm(), re_g);
+          near.index[m] = j;  // branch-free append
+          m += keep;
         }
-      near.offset[i + 1] = near.index.size();
+      near.offset[i + 1] = m;
     }
+    near.index.resize(m);
   }
 
   /// Collision model (MPS-Basic collision()): approaching pairs closer than the collision distance
@@ -247,8 +251,13 @@ struct FluidSolver::Impl {
     sys.rows = solver->owned_rows(n_rows);
     sys.row_ptr.resize(sys.rows.size() + 1);
     sys.rhs.resize(sys.rows.size());
-    sys.col.clear();
-    sys.value.clear();
+    // Upper bound of the entries: each row's neighbours plus its diagonal; trimmed at the end.
+    std::size_t max_entries = 0;
+    for (std::size_t r = sys.rows.begin; r < sys.rows.end; ++r)
+      max_entries += nl.count(static_cast<std::size_t>(particle_of_row[r])) + 1;
+    sys.col.resize(max_entries);
+    sys.value.resize(max_entries);
+    std::size_t m = 0;  // entries written
     sys.row_ptr[0] = 0;
     const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
     const Real compress = 1.0 / (c * c * dt * dt);
@@ -258,10 +267,10 @@ struct FluidSolver::Impl {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       const std::size_t local = r - sys.rows.begin;
       if (surface[i] != 0) {
-        sys.col.push_back(static_cast<GlobalId>(r));
-        sys.value.push_back(dirichlet_diag);
+        sys.col[m] = static_cast<GlobalId>(r);
+        sys.value[m++] = dirichlet_diag;
         sys.rhs[local] = 0;
-        sys.row_ptr[local + 1] = sys.col.size();
+        sys.row_ptr[local + 1] = m;
         continue;
       }
       const Vec xi = p.position[i];
@@ -276,22 +285,24 @@ struct FluidSolver::Impl {
         diag += coef;
         if (surface[j] != 0) continue;
         if (diag_pos == std::numeric_limits<std::size_t>::max() && j > i) {
-          diag_pos = sys.col.size();
-          sys.col.push_back(static_cast<GlobalId>(r));
-          sys.value.push_back(0);
+          diag_pos = m;
+          sys.col[m] = static_cast<GlobalId>(r);
+          sys.value[m++] = 0;
         }
-        sys.col.push_back(row_of[j]);
-        sys.value.push_back(-coef);
+        sys.col[m] = row_of[j];
+        sys.value[m++] = -coef;
       }
       if (diag_pos == std::numeric_limits<std::size_t>::max()) {
-        diag_pos = sys.col.size();
-        sys.col.push_back(static_cast<GlobalId>(r));
-        sys.value.push_back(0);
+        diag_pos = m;
+        sys.col[m] = static_cast<GlobalId>(r);
+        sys.value[m++] = 0;
       }
       sys.value[diag_pos] = diag;
       sys.rhs[local] = source * (n_star[i] - lat_g.n0);
-      sys.row_ptr[local + 1] = sys.col.size();
+      sys.row_ptr[local + 1] = m;
     }
+    sys.col.resize(m);
+    sys.value.resize(m);
   }
 
   /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient.
