@@ -181,8 +181,17 @@ struct CaseSpec {
 /// Parse and check a case file; `overrides` are "dotted.key=value" strings (--set), applied before
 /// checking. Throws CaseError with file, line, key and the expected form on any bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
-/// Same, from YAML text (`name` stands for the file in messages).
+/// Same, from YAML text (`name` stands for the file in messages; relative paths in the case, e.g. a
+/// tank-motion table, are relative to base_dir).
 CaseSpec parse_case(const std::string& yaml_text, const std::string& name,
-                    const std::vector<std::string>& overrides = {});
+                    const std::vector<std::string>& overrides = {}, const std::string& base_dir = ".");
+
+/// Keys of a case that a restart may change (with --set or --end-time): time.end, output (interval,
+/// fields), description and source. Everything else must equal the case the checkpoint was written for.
+const std::vector<std::string>& restart_free_keys();
+/// The differences between two resolved cases (CaseSpec::resolved_yaml) outside restart_free_keys(), one
+/// "key: value_a vs value_b" per differing leaf (numbers compare by value; "(absent)" for a missing key).
+/// Empty: the same case for a restart.
+std::vector<std::string> case_differences(const std::string& yaml_a, const std::string& yaml_b);
 
 }  // namespace mpsfsi
