@@ -88,16 +88,27 @@ CaseSpec restart_case(const RunOptions& opts, const Checkpoint& ck) {
   CaseSpec spec = opts.case_file.empty()
                       ? parse_case(info.resolved_yaml, info.case_file, opts.all_overrides(), info.case_dir)
                       : load_case(opts.case_file, opts.all_overrides());
-  const auto diffs = case_differences(info.resolved_yaml, spec.resolved_yaml);
-  if (!diffs.empty()) {
+  std::vector<CaseDifference> strict, tuned;
+  for (auto& d : case_differences(info.resolved_yaml, spec.resolved_yaml))
+    (key_under(d.key, restart_tunable_keys()) ? tuned : strict).push_back(std::move(d));
+  const auto listing = [](const std::vector<CaseDifference>& diffs) {
     std::string list;
-    for (std::size_t k = 0; k < diffs.size() && k < 8; ++k) list += "\n  " + diffs[k];
+    for (std::size_t k = 0; k < diffs.size() && k < 8; ++k) list += "\n  " + diffs[k].text();
     if (diffs.size() > 8) list += fmt::format("\n  ... and {} more", diffs.size() - 8);
+    return list;
+  };
+  if (!strict.empty())
     throw CaseError(fmt::format("--restart {}: the checkpoint was written for case '{}' ({}); this run's case '{}' ({}) "
-                                "differs (checkpoint vs this run):{}\nA restart may change only {}.",
-                                ck.path, info.case_name, info.case_file, spec.name, spec.file, list,
-                                fmt::join(restart_free_keys(), ", ")));
-  }
+                                "differs (checkpoint vs this run):{}\nA restart may change only {}, and the numerical "
+                                "controls {}.",
+                                ck.path, info.case_name, info.case_file, spec.name, spec.file, listing(strict),
+                                fmt::join(restart_free_keys(), ", "), fmt::join(restart_tunable_keys(), ", ")));
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (!tuned.empty() && rank == 0)
+    fmt::print("note: this restart changes numerical controls of the checkpoint's run (checkpoint vs this run):{}\n"
+               "so it continues that run otherwise than the original did (not bit for bit)\n",
+               listing(tuned));
   const Real eps = 1e-12 * std::max<Real>(1, spec.time.end);
   if (!(info.time < spec.time.end - eps))
     throw CaseError(fmt::format("--restart {}: the checkpoint is at t = {:.9g} s, not before the end time {:.9g} s; "

@@ -198,7 +198,7 @@ void broadcast(std::string& s, MPI_Comm comm) {
 
 }  // namespace
 
-std::string checkpoint_file_name(const Real t) { return fmt::format("checkpoint_{:.6f}.chk", t); }
+std::string checkpoint_file_name(const Real t) { return fmt::format("checkpoint_{:.9g}.chk", t); }
 
 void write_checkpoint(const std::string& path, const CheckpointInfo& info, const std::string& payload) {
   BinaryWriter header;

@@ -70,7 +70,7 @@ void write_checkpoint(const std::string& path, const CheckpointInfo& info, const
 /// the problem (not a checkpoint, other format or program version, truncated, damaged).
 Checkpoint read_checkpoint(const std::string& path, MPI_Comm comm);
 
-/// File name of the checkpoint at time t: checkpoint_<t with 6 decimals>.chk.
+/// File name of the checkpoint at time t: checkpoint_<t to 9 significant digits>.chk.
 std::string checkpoint_file_name(Real t);
 
 /// Marks of those of `files` that exist in `dir` (size and hash of their whole content now).

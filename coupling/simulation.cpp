@@ -412,9 +412,10 @@ class RunLoop {
       throw CaseError(std::string("checkpoint ") + e.what());
     }
     if (!exact_ && log_)
-      fmt::print("note: the checkpoint holds a pressure preconditioner kept between setups "
-                 "(fluid.preconditioner_rebuild_every > 1) of a run on several ranks, which is set up anew here: the "
-                 "continuation agrees with the original run to the solver tolerance, not bit for bit\n");
+      fmt::print("note: the pressure preconditioner the checkpoint's run kept between setups "
+                 "(fluid.preconditioner_rebuild_every > 1) cannot be rebuilt here (it was saved on several ranks, or "
+                 "the setting changed) and is set up anew: the continuation agrees with the original run to the "
+                 "solver tolerance, not bit for bit\n");
     if (rank_ == 0) {
       if (settings_.continue_series)
         writer_.adopt_existing(t_, c.info.next_frame);

@@ -291,19 +291,16 @@ class TrilinosPressureSolver final : public PressureSolver {
   bool load_state(BinaryReader& in) override {
     in.expect_section("pressure_solver");
     const std::string prec = in.string("the preconditioner");
-    if (prec != settings_.preconditioner)
-      in.fail("the checkpoint's pressure solve used preconditioner '" + prec + "', this run '" + settings_.preconditioner + "'");
-    solves_since_setup_ = in.u64("the solves since the preconditioner setup");
-    iterations_after_setup_ = static_cast<int>(in.i64("the iterations after the setup"));
-    force_setup_ = in.boolean("the setup flag");
-    lambda_max_ = in.f64("the eigenvalue bound");
-    map_rows_ = in.u64("the row count");
+    const std::size_t since = in.u64("the solves since the preconditioner setup");
+    const int iterations = static_cast<int>(in.i64("the iterations after the setup"));
+    const bool force = in.boolean("the setup flag");
+    const double lambda = in.f64("the eigenvalue bound");
+    const std::size_t rows = in.u64("the row count");
     n_solves_ = in.u64("the solve count");
     const bool kept = in.boolean("the kept-preconditioner flag");
     const bool saved = in.boolean("the setup-matrix flag");
-    restore_pending_ = false;
+    LocalRows s;
     if (saved) {
-      LocalRows s;
       s.n_global_rows = in.u64("the setup matrix size");
       s.rows.begin = in.u64("the setup matrix rows");
       s.rows.end = in.u64("the setup matrix rows");
@@ -315,6 +312,21 @@ class TrilinosPressureSolver final : public PressureSolver {
         in.fail("the pressure solver's setup matrix is inconsistent");
       for (const GlobalId c : s.col)
         if (c < 0 || static_cast<std::size_t>(c) >= s.n_global_rows) in.fail("the pressure solver's setup matrix is inconsistent");
+    }
+    restore_pending_ = false;
+    map_rows_ = rows;
+    if (prec != settings_.preconditioner) {  // a restart that changes the preconditioner: a fresh start
+      solves_since_setup_ = 0;
+      iterations_after_setup_ = 0;
+      force_setup_ = true;
+      lambda_max_ = 0;
+      return true;  // not the original run, but by the user's choice (reported with the case change)
+    }
+    solves_since_setup_ = since;
+    iterations_after_setup_ = iterations;
+    force_setup_ = force;
+    lambda_max_ = lambda;
+    if (saved) {
       setup_sys_ = std::move(s);
       restore_pending_ = n_ranks_ == 1 && keeps_setup();
     }

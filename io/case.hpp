@@ -186,12 +186,25 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
 CaseSpec parse_case(const std::string& yaml_text, const std::string& name,
                     const std::vector<std::string>& overrides = {}, const std::string& base_dir = ".");
 
-/// Keys of a case that a restart may change (with --set or --end-time): time.end, output (interval,
-/// fields), description and source. Everything else must equal the case the checkpoint was written for.
+/// Keys of a case that a restart may change freely (with --set or --end-time): time.end, output (interval,
+/// fields), description and source.
 const std::vector<std::string>& restart_free_keys();
-/// The differences between two resolved cases (CaseSpec::resolved_yaml) outside restart_free_keys(), one
-/// "key: value_a vs value_b" per differing leaf (numbers compare by value; "(absent)" for a missing key).
-/// Empty: the same case for a restart.
-std::vector<std::string> case_differences(const std::string& yaml_a, const std::string& yaml_b);
+/// Numerical controls a restart may change, e.g. to continue with a smaller time step after a run went
+/// unstable: time.cfl, time.dt, time.dt_max, coupling.subcycles, fluid.solver, fluid.preconditioner,
+/// fluid.tolerance, fluid.max_iterations, fluid.preconditioner_rebuild_every, solid.dt, solid.dt_factor. The
+/// continuation then is not the original run's. Every other key must equal the checkpoint's case.
+const std::vector<std::string>& restart_tunable_keys();
+/// True when `key` (dotted, e.g. "time.cfl" or "bodies[0].name") is one of `roots` or lies below one.
+bool key_under(const std::string& key, const std::vector<std::string>& roots);
+
+/// One leaf of a case whose value differs between two cases.
+struct CaseDifference {
+  std::string key;  ///< dotted path, e.g. "bodies[1].rectangle.max[0]"
+  std::string a, b; ///< the values as written; "(absent)" for a missing key
+  std::string text() const { return key + ": " + a + " vs " + b; }
+};
+/// The differences between two resolved cases (CaseSpec::resolved_yaml) outside restart_free_keys(), by
+/// key (numbers compare by value). Empty: the same case for a restart.
+std::vector<CaseDifference> case_differences(const std::string& yaml_a, const std::string& yaml_b);
 
 }  // namespace mpsfsi

@@ -1112,27 +1112,38 @@ const std::vector<std::string>& restart_free_keys() {
   return keys;
 }
 
-std::vector<std::string> case_differences(const std::string& yaml_a, const std::string& yaml_b) {
+const std::vector<std::string>& restart_tunable_keys() {
+  static const std::vector<std::string> keys = {
+      "time.cfl",       "time.dt",         "time.dt_max",         "coupling.subcycles",
+      "fluid.solver",   "fluid.preconditioner", "fluid.tolerance", "fluid.max_iterations",
+      "fluid.preconditioner_rebuild_every", "solid.dt", "solid.dt_factor"};
+  return keys;
+}
+
+bool key_under(const std::string& key, const std::vector<std::string>& roots) {
+  for (const auto& k : roots)
+    if (key == k || key.rfind(k + ".", 0) == 0 || key.rfind(k + "[", 0) == 0) return true;
+  return false;
+}
+
+std::vector<CaseDifference> case_differences(const std::string& yaml_a, const std::string& yaml_b) {
   std::map<std::string, std::string> a, b;
   flatten(YAML::Load(yaml_a), "", a);
   flatten(YAML::Load(yaml_b), "", b);
-  const auto free = [](const std::string& key) {
-    for (const auto& k : restart_free_keys())
-      if (key == k || key.rfind(k + ".", 0) == 0 || key.rfind(k + "[", 0) == 0) return true;
-    return false;
-  };
-  std::vector<std::string> diffs;
+  std::map<std::string, CaseDifference> diffs;  // sorted by key
   for (const auto& [key, value] : a) {
-    if (free(key)) continue;
+    if (key_under(key, restart_free_keys())) continue;
     const auto it = b.find(key);
     if (it == b.end())
-      diffs.push_back(fmt::format("{}: {} vs (absent)", key, value));
+      diffs[key] = {key, value, "(absent)"};
     else if (!same_value(value, it->second))
-      diffs.push_back(fmt::format("{}: {} vs {}", key, value, it->second));
+      diffs[key] = {key, value, it->second};
   }
   for (const auto& [key, value] : b)
-    if (!free(key) && !a.count(key)) diffs.push_back(fmt::format("{}: (absent) vs {}", key, value));
-  return diffs;
+    if (!key_under(key, restart_free_keys()) && !a.count(key)) diffs[key] = {key, "(absent)", value};
+  std::vector<CaseDifference> out;
+  for (auto& kv : diffs) out.push_back(std::move(kv.second));
+  return out;
 }
 
 }  // namespace mpsfsi

@@ -178,8 +178,12 @@ TEST(CaseDifferences, OnlyKeysARestartMayNotChangeCount) {
   EXPECT_TRUE(case_differences(base, parse_case(case_yaml, "tiny.yaml", {"dp=0.010000000000000000208"}).resolved_yaml).empty());
   const auto d = case_differences(base, parse_case(case_yaml, "tiny.yaml", {"dp=0.02", "time.dt_max=0.002"}).resolved_yaml);
   ASSERT_EQ(d.size(), 2u);
-  EXPECT_EQ(d[0], "dp: 0.01 vs 0.02");
-  EXPECT_EQ(d[1], "time.dt_max: (absent) vs 0.002");
+  EXPECT_EQ(d[0].text(), "dp: 0.01 vs 0.02");
+  EXPECT_EQ(d[1].text(), "time.dt_max: (absent) vs 0.002");
+  EXPECT_FALSE(key_under(d[0].key, restart_tunable_keys()));
+  EXPECT_TRUE(key_under(d[1].key, restart_tunable_keys()));
+  EXPECT_TRUE(key_under("output.fields[2]", restart_free_keys()));
+  EXPECT_FALSE(key_under("time.endless", restart_free_keys()));
 }
 
 CheckpointInfo sample_info() {

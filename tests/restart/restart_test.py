@@ -173,7 +173,12 @@ def cli(a):
     run([a.mpsfsi, "run", a.other_case, "--restart", ck, "--output", fresh(other)], 2,
         r"checkpoint was written for case '\w+'.*differs.*name: \w+ vs \w+.*A restart may change only time.end")
     run([a.mpsfsi, "run", a.case, "--restart", ck, "--output", fresh(other), "--set", "dp=0.01", "--set",
-         "fluid.tolerance=1e-6"], 2, r"differs \(checkpoint vs this run\):\s+fluid.tolerance: \S+ vs 1e-6")
+         "gravity=[0,-9.8]", "--set", "time.cfl=0.1"], 2,
+        r"differs \(checkpoint vs this run\):\s+gravity\[1\]: -9.81 vs -9.8\nA restart may change only")
+    # A numerical control may change (the continuation is then another run), and is reported.
+    run([a.mpsfsi, "run", a.case, "--restart", ck, "--output", fresh(other), "--set", "dp=0.01", "--set",
+         "time.cfl=0.1", "--set", "fluid.preconditioner=jacobi"], 0,
+        r"note: this restart changes numerical controls .*fluid.preconditioner: ssor vs jacobi\s+time.cfl: 0.2 vs 0.1")
     # Not a checkpoint, truncated, damaged.
     run([a.mpsfsi, "run", "--restart", a.case, "--output", fresh(other)], 2, r"is not an mpsfsi checkpoint")
     data = open(ck, "rb").read()
