@@ -82,8 +82,8 @@ void on_rank0(const int rank, F&& f) {
 
 /// The case of a restart: the case file if given, else the one stored in the checkpoint; either way with
 /// the command line's overrides. Refused unless it equals the checkpoint's case outside the keys a restart
-/// may change, and unless the checkpoint lies before the end time.
-CaseSpec restart_case(const RunOptions& opts, const Checkpoint& ck) {
+/// may change, and unless the checkpoint lies before the end time. `note`: the numerical controls it changes.
+CaseSpec restart_case(const RunOptions& opts, const Checkpoint& ck, std::string& note) {
   const CheckpointInfo& info = ck.info;
   CaseSpec spec = opts.case_file.empty()
                       ? parse_case(info.resolved_yaml, info.case_file, opts.all_overrides(), info.case_dir)
@@ -103,12 +103,10 @@ CaseSpec restart_case(const RunOptions& opts, const Checkpoint& ck) {
                                 "controls {}.",
                                 ck.path, info.case_name, info.case_file, spec.name, spec.file, listing(strict),
                                 fmt::join(restart_free_keys(), ", "), fmt::join(restart_tunable_keys(), ", ")));
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  if (!tuned.empty() && rank == 0)
-    fmt::print("note: this restart changes numerical controls of the checkpoint's run (checkpoint vs this run):{}\n"
-               "so it continues that run otherwise than the original did (not bit for bit)\n",
-               listing(tuned));
+  if (!tuned.empty())
+    note = fmt::format("note: this restart changes numerical controls of the checkpoint's run (checkpoint vs this "
+                       "run):{}\nso it continues that run otherwise than the original did (not bit for bit)\n",
+                       listing(tuned));
   const Real eps = 1e-12 * std::max<Real>(1, spec.time.end);
   if (!(info.time < spec.time.end - eps))
     throw CaseError(fmt::format("--restart {}: the checkpoint is at t = {:.9g} s, not before the end time {:.9g} s; "
@@ -127,7 +125,8 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
   std::unique_ptr<Checkpoint> ck;
   if (!opts.restart.empty()) ck = std::make_unique<Checkpoint>(read_checkpoint(opts.restart, MPI_COMM_WORLD));
   else if (opts.case_file.empty()) throw CaseError("run: a case file is required (or --restart CHECKPOINT)");
-  const CaseSpec spec = ck ? restart_case(opts, *ck) : load_case(opts.case_file, opts.all_overrides());
+  std::string note;
+  const CaseSpec spec = ck ? restart_case(opts, *ck, note) : load_case(opts.case_file, opts.all_overrides());
   Scene scene = build_scene(spec);
   std::string out = opts.output;
   if (out.empty()) {
@@ -169,6 +168,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
                    ck->info.n_ranks, n_ranks);
     }
   }
+  if (rank == 0 && !note.empty()) fmt::print("{}", note);  // also with --quiet: the run is not the original's
   try {
     const RunSummary s = run_case(spec, std::move(scene), settings, MPI_COMM_WORLD);
     if (rank == 0) fmt::print("{}\n", format_summary(s));

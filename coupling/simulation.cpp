@@ -1,7 +1,8 @@
 // The run loop: fluid step, solid sub-steps, state checks (non-finite or runaway velocity, solid leaving
-// the domain), frames and probes, progress line and JSON-lines run log. With both fluid and solid the
-// steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the solid's bond
-// damping and the load relaxation of the case's coupling map.
+// the domain), frames and probes, progress line and JSON-lines run log, checkpoints and restarts (the run
+// loop's own state plus each participant's save_state / load_state, in named sections). With both fluid
+// and solid the steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the
+// solid's bond damping and the load relaxation of the case's coupling map.
 #include "coupling/simulation.hpp"
 
 #include "coupling/checkpoint.hpp"

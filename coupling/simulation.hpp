@@ -2,7 +2,8 @@
 // advances the fluid, advances the solid by N sub-steps of dt/N, checks the state, and writes frames
 // and probes at the output interval. It also reports progress (an updating line on a terminal, plain
 // lines otherwise), writes a JSON-lines run log, and stops with a diagnosis (and the last good frame)
-// when the state becomes invalid. Only this folder sees both the fluid and the solid.
+// when the state becomes invalid. It writes checkpoints of the complete state and continues a run from one
+// (coupling/checkpoint.hpp). Only this folder sees both the fluid and the solid.
 #pragma once
 
 #include "io/case.hpp"
