@@ -6,13 +6,18 @@
 #include "io/vtk_writer.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include "core/version.hpp"
+#include "coupling/checkpoint.hpp"
 #include "coupling/simulation.hpp"
 
 #include <mpi.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 namespace mpsfsi {
 
@@ -47,27 +52,123 @@ int command_check(const RunOptions& opts) {
   return 0;
 }
 
-int command_run(const RunOptions& opts, const std::string& command_line) {
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  const CaseSpec spec = load_case(opts.case_file, opts.all_overrides());
-  Scene scene = build_scene(spec);
-  const std::string out = opts.output.empty() ? "out/" + spec.name : opts.output;
-  namespace fs = std::filesystem;
+namespace {
+
+/// Runs `f` on rank 0 and hands its outcome to every rank: a CaseError or other exception on rank 0 is
+/// thrown on all ranks (so that no rank waits forever for one that stopped).
+template <class F>
+void on_rank0(const int rank, F&& f) {
+  int status = 0;  // 0 ok, 1 CaseError, 2 other error
+  std::string message;
   if (rank == 0) {
-    if (fs::exists(out) && !fs::is_empty(out) && !opts.overwrite)
-      throw CaseError(fmt::format("--output {}: the folder exists and is not empty; choose another or pass --overwrite", out));
-    fs::create_directories(out);
-    std::ofstream(out + "/case.resolved.yaml") << spec.resolved_yaml << "\n";
-    std::ofstream(out + "/command.txt") << command_line << "\n";
+    try {
+      f();
+    } catch (const CaseError& e) {
+      status = 1;
+      message = e.what();
+    } catch (const std::exception& e) {
+      status = 2;
+      message = e.what();
+    }
   }
-  MPI_Barrier(MPI_COMM_WORLD);
+  MPI_Bcast(&status, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  std::uint64_t n = message.size();
+  MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+  message.resize(n);
+  if (n > 0) MPI_Bcast(message.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (status == 1) throw CaseError(message);
+  if (status == 2) throw std::runtime_error(message);
+}
+
+/// The case of a restart: the case file if given, else the one stored in the checkpoint; either way with
+/// the command line's overrides. Refused unless it equals the checkpoint's case outside the keys a restart
+/// may change, and unless the checkpoint lies before the end time. `note`: the numerical controls it changes.
+CaseSpec restart_case(const RunOptions& opts, const Checkpoint& ck, std::string& note) {
+  const CheckpointInfo& info = ck.info;
+  CaseSpec spec = opts.case_file.empty()
+                      ? parse_case(info.resolved_yaml, info.case_file, opts.all_overrides(), info.case_dir)
+                      : load_case(opts.case_file, opts.all_overrides());
+  std::vector<CaseDifference> strict, tuned;
+  for (auto& d : case_differences(info.resolved_yaml, spec.resolved_yaml))
+    (key_under(d.key, restart_tunable_keys()) ? tuned : strict).push_back(std::move(d));
+  const auto listing = [](const std::vector<CaseDifference>& diffs) {
+    std::string list;
+    for (std::size_t k = 0; k < diffs.size() && k < 8; ++k) list += "\n  " + diffs[k].text();
+    if (diffs.size() > 8) list += fmt::format("\n  ... and {} more", diffs.size() - 8);
+    return list;
+  };
+  if (!strict.empty())
+    throw CaseError(fmt::format("--restart {}: the checkpoint was written for case '{}' ({}); this run's case '{}' ({}) "
+                                "differs (checkpoint vs this run):{}\nA restart may change only {}, and the numerical "
+                                "controls {}.",
+                                ck.path, info.case_name, info.case_file, spec.name, spec.file, listing(strict),
+                                fmt::join(restart_free_keys(), ", "), fmt::join(restart_tunable_keys(), ", ")));
+  if (!tuned.empty())
+    note = fmt::format("note: this restart changes numerical controls of the checkpoint's run (checkpoint vs this "
+                       "run):{}\nso it continues that run otherwise than the original did (not bit for bit)\n",
+                       listing(tuned));
+  const Real eps = 1e-12 * std::max<Real>(1, spec.time.end);
+  if (!(info.time < spec.time.end - eps))
+    throw CaseError(fmt::format("--restart {}: the checkpoint is at t = {:.9g} s, not before the end time {:.9g} s; "
+                                "pass a later --end-time",
+                                ck.path, info.time, spec.time.end));
+  return spec;
+}
+
+}  // namespace
+
+int command_run(const RunOptions& opts, const std::string& command_line) {
+  int rank = 0, n_ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
+  namespace fs = std::filesystem;
+  std::unique_ptr<Checkpoint> ck;
+  if (!opts.restart.empty()) ck = std::make_unique<Checkpoint>(read_checkpoint(opts.restart, MPI_COMM_WORLD));
+  else if (opts.case_file.empty()) throw CaseError("run: a case file is required (or --restart CHECKPOINT)");
+  std::string note;
+  const CaseSpec spec = ck ? restart_case(opts, *ck, note) : load_case(opts.case_file, opts.all_overrides());
+  Scene scene = build_scene(spec);
+  std::string out = opts.output;
+  if (out.empty()) {
+    const std::string ck_dir = ck ? fs::path(ck->path).parent_path().string() : std::string();
+    out = ck ? (ck_dir.empty() ? std::string(".") : ck_dir) : "out/" + spec.name;
+  }
   RunSettings settings;
   settings.output_dir = out;
   settings.quiet = opts.quiet;
-  if (rank == 0 && !opts.quiet)
-    fmt::print("mpsfsi {}: case {} ({} particles), end time {:g} s, output {}\n", MPSFSI_VERSION, spec.name,
+  settings.checkpoint_every = opts.checkpoint_every.value_or(0);
+  settings.checkpoint_keep = opts.checkpoint_keep;
+  settings.restart = ck.get();
+  bool continuing = false;
+  on_rank0(rank, [&] {
+    if (ck) {
+      const RestartOutputs r = prepare_restart_outputs(out, ck->info, opts.overwrite);
+      continuing = r.continuing;
+      settings.append_files = r.appended;
+    } else {
+      if (fs::exists(out) && !fs::is_empty(out) && !opts.overwrite)
+        throw CaseError(fmt::format("--output {}: the folder exists and is not empty; choose another or pass --overwrite", out));
+      fs::create_directories(out);
+    }
+    std::ofstream(out + "/case.resolved.yaml") << spec.resolved_yaml << "\n";
+    std::ofstream(out + "/command.txt", continuing ? std::ios::app : std::ios::trunc) << command_line << "\n";
+  });
+  settings.continue_series = continuing;
+  if (rank == 0 && !opts.quiet) {
+    fmt::print("mpsfsi {}: case {} ({} particles), end time {:g} s, output {}\n", code_version(), spec.name,
                scene.particles.size(), spec.time.end, out);
+    if (ck) {
+      fmt::print("restart from {} (t = {:.9g} s, step {}, written {}); {}\n", ck->path, ck->info.time, ck->info.step,
+                 ck->info.written_at,
+                 continuing ? "continuing the folder's outputs after the checkpoint time"
+                            : "new output files from the checkpoint time");
+      if (ck->info.n_ranks != n_ranks)
+        fmt::print("note: the checkpoint was written on {} rank(s), this run has {}: the pressure solve is split "
+                   "otherwise, so the run continues correctly but not bit for bit as the original would have\n",
+                   ck->info.n_ranks, n_ranks);
+    }
+  }
+  if (rank == 0 && !note.empty()) fmt::print("{}", note);  // also with --quiet: the run is not the original's
   try {
     const RunSummary s = run_case(spec, std::move(scene), settings, MPI_COMM_WORLD);
     if (rank == 0) fmt::print("{}\n", format_summary(s));

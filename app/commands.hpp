@@ -16,6 +16,9 @@ struct RunOptions {
   std::vector<std::string> overrides;
   bool overwrite = false;
   bool quiet = false;
+  std::string restart;              ///< run: checkpoint file (or folder: its latest checkpoint) to continue
+  std::optional<double> checkpoint_every;  ///< run: simulated seconds between checkpoints
+  int checkpoint_keep = 0;          ///< run: keep the newest N checkpoints (0: all)
 
   /// The command-line shortcuts (--end-time, --dp, --subcycles) as --set overrides, then the --set ones.
   std::vector<std::string> all_overrides() const;

@@ -2,6 +2,7 @@
 // estimate; `mpsfsi run CASE` runs it. Exit codes: 0 success, 2 bad input (case file or command
 // line), 1 an internal or I/O error, 3 a run that went unstable (diagnosis printed).
 #include "app/commands.hpp"
+#include "core/version.hpp"
 #include "io/case.hpp"
 
 #include <CLI/CLI.hpp>
@@ -26,27 +27,37 @@ int main(int argc, char** argv) {
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
   CLI::App app{"mpsfsi: fluid-structure interaction with the Moving Particle Semi-implicit method"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("mpsfsi ") + MPSFSI_VERSION);
+  app.set_version_flag("--version", std::string("mpsfsi ") + code_version());
 
   // Options shared by run and check: the case, --dp and --set.
-  const auto add_case_options = [](CLI::App* cmd, RunOptions& o) {
-    cmd->add_option("case", o.case_file, "Case file (YAML)")->required()->check(CLI::ExistingFile);
+  const auto add_case_options = [](CLI::App* cmd, RunOptions& o, const bool required) {
+    cmd->add_option("case", o.case_file, required ? "Case file (YAML)" : "Case file (YAML); optional with --restart")
+        ->required(required)
+        ->check(CLI::ExistingFile);
     cmd->add_option("--dp", o.dp, "Particle spacing [m] (overrides dp)");
     cmd->add_option("--set", o.overrides, "Override a case value: dotted.key=value (repeatable)");
   };
 
   RunOptions run_opts;
   auto* run = app.add_subcommand("run", "Run a case");
-  add_case_options(run, run_opts);
+  add_case_options(run, run_opts, false);
   run->add_option("--end-time", run_opts.end_time, "End time [s] (overrides time.end)");
   run->add_option("--subcycles", run_opts.subcycles, "Solid sub-steps per fluid step: N or auto (overrides coupling.subcycles)");
   run->add_option("--output", run_opts.output, "Output folder (default out/<case name>)");
   run->add_flag("--overwrite", run_opts.overwrite, "Allow writing into an existing output folder");
   run->add_flag("--quiet", run_opts.quiet, "Print only the summary and errors");
+  run->add_option("--checkpoint-every", run_opts.checkpoint_every,
+                  "Write checkpoint_<t>.chk into the output folder every T simulated seconds, and at the end")
+      ->check(CLI::PositiveNumber);
+  run->add_option("--checkpoint-keep", run_opts.checkpoint_keep, "Keep only the newest N checkpoints of this run (default: all)")
+      ->check(CLI::NonNegativeNumber);
+  run->add_option("--restart", run_opts.restart,
+                  "Continue from a checkpoint file (or a folder: its latest checkpoint); the case is the checkpoint's "
+                  "unless given; output in the checkpoint's folder unless --output");
 
   RunOptions check_opts;
   auto* check = app.add_subcommand("check", "Validate a case; print particle counts per body and the memory estimate");
-  add_case_options(check, check_opts);
+  add_case_options(check, check_opts, true);
   check->add_option("--output", check_opts.output, "Also write the initial particles (.vtu/.pvd) into this folder");
 
   try {

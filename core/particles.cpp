@@ -1,6 +1,8 @@
 // Structure-of-arrays particle storage: appending, extra fields, reordering and removal.
 #include "core/particles.hpp"
 
+#include "core/binary_io.hpp"
+
 #include <cassert>
 #include <stdexcept>
 
@@ -125,6 +127,91 @@ std::size_t ParticleSet::memory_bytes() const {
   b += scalar_fields_.size() * size() * sizeof(Real);
   b += vector_fields_.size() * size() * sizeof(Vec);
   return b;
+}
+
+void ParticleSet::save_state(BinaryWriter& out) const {
+  out.section("particles");
+  out.u64(size());
+  out.u64(bodies.size());
+  for (const auto& b : bodies) {
+    out.string(b.name);
+    out.value(static_cast<std::uint8_t>(b.kind));
+    out.value(static_cast<std::int32_t>(b.material));
+  }
+  const auto named = [&](const char* name, const auto& a) {
+    out.string(name);
+    out.array(a);
+  };
+  named("position", position);
+  named("velocity", velocity);
+  named("kind", kind);
+  named("body", body);
+  named("material", material);
+  named("clamped", clamped);
+  named("global_id", global_id);
+  out.u64(scalar_fields_.size());
+  for (const auto& [name, a] : scalar_fields_) named(name.c_str(), a);
+  out.u64(vector_fields_.size());
+  for (const auto& [name, a] : vector_fields_) named(name.c_str(), a);
+}
+
+void ParticleSet::load_state(BinaryReader& in) {
+  in.expect_section("particles");
+  const std::size_t n = in.u64("the particle count");
+  const std::size_t nb = in.u64("the body count");
+  if (nb != bodies.size())
+    in.fail("the checkpoint has " + std::to_string(nb) + " bodies, this case " + std::to_string(bodies.size()));
+  for (std::size_t b = 0; b < nb; ++b) {
+    const std::string name = in.string("a body name");
+    const auto k = in.value<std::uint8_t>("a body kind");
+    const auto m = in.value<std::int32_t>("a body material");
+    if (name != bodies[b].name || k != static_cast<std::uint8_t>(bodies[b].kind) || m != bodies[b].material)
+      in.fail("body " + std::to_string(b) + " of the checkpoint is '" + name + "', of this case '" + bodies[b].name +
+              "' (or its kind or material differ)");
+  }
+  // Read into a copy: this set stays unchanged when the data do not match.
+  ParticleSet next;
+  next.bodies = bodies;
+  const auto named = [&](const char* name, auto& a) {
+    const std::string got = in.string("an array name");
+    if (got != name) in.fail("expected particle array '" + std::string(name) + "', found '" + got + "'");
+    a = in.array<typename std::decay_t<decltype(a)>::value_type>(name, n);
+  };
+  named("position", next.position);
+  named("velocity", next.velocity);
+  named("kind", next.kind);
+  named("body", next.body);
+  named("material", next.material);
+  named("clamped", next.clamped);
+  named("global_id", next.global_id);
+  const auto fields = [&](auto& mine, auto& theirs, const char* what) {
+    const std::size_t count = in.u64("a field count");
+    for (std::size_t f = 0; f < count; ++f) {
+      const std::string name = in.string("a field name");
+      if (!mine.count(name))
+        in.fail("the checkpoint has the " + std::string(what) + " particle field '" + name + "', which this run does not have");
+      theirs[name] = in.template array<typename std::decay_t<decltype(mine.begin()->second)>::value_type>(name.c_str(), n);
+    }
+    for (const auto& kv : mine)
+      if (!theirs.count(kv.first))
+        in.fail("this run has the " + std::string(what) + " particle field '" + kv.first + "', which the checkpoint does not have");
+  };
+  fields(scalar_fields_, next.scalar_fields_, "scalar");
+  fields(vector_fields_, next.vector_fields_, "vector");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (static_cast<std::size_t>(next.body[i]) >= bodies.size()) in.fail("particle " + std::to_string(i) + " has no valid body");
+    if (static_cast<std::uint8_t>(next.kind[i]) > static_cast<std::uint8_t>(ParticleKind::solid))
+      in.fail("particle " + std::to_string(i) + " has no valid kind");
+  }
+  position.swap(next.position);
+  velocity.swap(next.velocity);
+  kind.swap(next.kind);
+  body.swap(next.body);
+  material.swap(next.material);
+  clamped.swap(next.clamped);
+  global_id.swap(next.global_id);
+  for (auto& [name, a] : scalar_fields_) a.swap(next.scalar_fields_[name]);
+  for (auto& [name, a] : vector_fields_) a.swap(next.vector_fields_[name]);
 }
 
 }  // namespace mpsfsi

@@ -12,6 +12,9 @@
 
 namespace mpsfsi {
 
+class BinaryWriter;
+class BinaryReader;
+
 /// What a particle is. Wall particles take part in the pressure solve, dummy particles only fill
 /// the kernel support behind a wall (seed 004 §4.3).
 enum class ParticleKind : std::uint8_t { fluid = 0, wall = 1, dummy = 2, solid = 3 };
@@ -66,6 +69,13 @@ class ParticleSet {
 
   /// Bytes held by the particle arrays (for the memory estimate).
   std::size_t memory_bytes() const;
+
+  /// Checkpoints: the bodies and every per-particle array (core arrays and extra fields) by name.
+  void save_state(BinaryWriter& out) const;
+  /// Replaces every array by the saved one (the particle count may differ). The saved set must have the
+  /// same bodies and the same arrays (names, element types) as this one; otherwise throws
+  /// StateFormatError naming the first difference and leaves this set unchanged.
+  void load_state(BinaryReader& in);
 
  private:
   /// Apply f to every per-particle array (core and extra fields).

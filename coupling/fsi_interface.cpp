@@ -1,6 +1,7 @@
 // Partitioned fluid-solid coupling (seed 004 §4.5, eq. 49-51): see fsi_interface.hpp.
 #include "coupling/fsi_interface.hpp"
 
+#include "core/binary_io.hpp"
 #include "core/kernel.hpp"
 #include "solid/solid_solver.hpp"
 
@@ -210,10 +211,70 @@ void FsiInterface::advance_solid(SolidSolver& solid, const Real t, const Real dt
     if (p_.kind[i] == ParticleKind::solid) mean_v_[p_.global_id[i]] = (p_.position[i] - solid_x_[k++]) / dt;
 }
 
-void FsiInterface::open_csv(const std::string& path) {
-  csv_.open(path);
+void FsiInterface::open_csv(const std::string& path, const bool append) {
+  csv_.open(path, append ? std::ios::app : std::ios::trunc);
   if (!csv_) throw std::runtime_error("cannot write " + path);
-  csv_ << "time,body,fx,fy,work_step,work_total,wetted\n";
+  if (!append) csv_ << "time,body,fx,fy,work_step,work_total,wetted\n";
+}
+
+namespace {
+/// A GlobalId -> Vec map as two arrays sorted by id (the file does not depend on the hash order).
+void save_map(BinaryWriter& out, const std::unordered_map<GlobalId, Vec>& m) {
+  std::vector<std::pair<GlobalId, Vec>> items(m.begin(), m.end());
+  std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<GlobalId> ids;
+  std::vector<Vec> values;
+  for (const auto& [id, v] : items) {
+    ids.push_back(id);
+    values.push_back(v);
+  }
+  out.array(ids);
+  out.array(values);
+}
+
+std::unordered_map<GlobalId, Vec> load_map(BinaryReader& in, const char* what) {
+  const auto ids = in.array<GlobalId>(what);
+  const auto values = in.array<Vec>(what, ids.size());
+  std::unordered_map<GlobalId, Vec> m;
+  m.reserve(ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) m.emplace(ids[k], values[k]);
+  return m;
+}
+}  // namespace
+
+void FsiInterface::save_state(BinaryWriter& out) const {
+  out.section("coupling");
+  out.u64(bodies_.size());
+  for (const auto& b : bodies_) {
+    out.string(b.name);
+    out.value(b.force);
+    out.f64(b.work_step);
+    out.f64(b.work_total);
+    out.u64(b.n_wetted);
+  }
+  save_map(out, prev_load_);
+  save_map(out, mean_v_);
+}
+
+void FsiInterface::load_state(BinaryReader& in) {
+  in.expect_section("coupling");
+  const std::size_t nb = in.u64("the interface body count");
+  if (nb != bodies_.size())
+    in.fail(fmt::format("the checkpoint's interface has {} solid bodies, this case {}", nb, bodies_.size()));
+  std::vector<InterfaceBody> bodies = bodies_;
+  for (auto& b : bodies) {
+    const std::string name = in.string("an interface body name");
+    if (name != b.name) in.fail("the checkpoint's interface body '" + name + "' is '" + b.name + "' in this case");
+    b.force = in.value<Vec>("an interface force");
+    b.work_step = in.f64("an interface work");
+    b.work_total = in.f64("an interface work");
+    b.n_wetted = in.u64("a wetted count");
+  }
+  auto prev = load_map(in, "the previous interface load");
+  auto mean_v = load_map(in, "the solid's mean velocity");
+  bodies_.swap(bodies);
+  prev_load_.swap(prev);
+  mean_v_.swap(mean_v);
 }
 
 void FsiInterface::write_csv(const Real t) {

@@ -47,6 +47,8 @@
 namespace mpsfsi {
 
 class SolidSolver;
+class BinaryWriter;
+class BinaryReader;
 
 struct FsiOptions {
   enum class Normalisation { lattice, seed };
@@ -116,8 +118,15 @@ class FsiInterface {
   Real n0() const { return n0_; }
 
   /// interface.csv: time, body, fx, fy, work_step, work_total, wetted (one row per solid body).
-  void open_csv(const std::string& path);
+  /// append: continue an existing file (a restarted run) instead of starting it with its header.
+  void open_csv(const std::string& path, bool append = false);
   void write_csv(Real t);
+
+  /// Checkpoints: what the interface carries from step to step (the per-body totals, the previous
+  /// step's load for load_relaxation, the solid's mean velocity for the mid-step predictor). The initial
+  /// solid number densities are rebuilt by initialize() from the initial scene.
+  void save_state(BinaryWriter& out) const;
+  void load_state(BinaryReader& in);
 
  private:
   ParticleSet& p_;

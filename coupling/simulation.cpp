@@ -1,9 +1,11 @@
 // The run loop: fluid step, solid sub-steps, state checks (non-finite or runaway velocity, solid leaving
-// the domain), frames and probes, progress line and JSON-lines run log. With both fluid and solid the
-// steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the solid's bond
-// damping and the load relaxation of the case's coupling map.
+// the domain), frames and probes, progress line and JSON-lines run log, checkpoints and restarts (the run
+// loop's own state plus each participant's save_state / load_state, in named sections). With both fluid
+// and solid the steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the
+// solid's bond damping and the load relaxation of the case's coupling map.
 #include "coupling/simulation.hpp"
 
+#include "coupling/checkpoint.hpp"
 #include "coupling/fsi_interface.hpp"
 
 #include "fluid/fluid_solver.hpp"
@@ -16,9 +18,13 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
+#include <deque>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 
@@ -66,45 +72,60 @@ class RunLoop {
   RunLoop(const CaseSpec& spec, Scene& scene, const RunSettings& settings, MPI_Comm comm)
       : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec),
         writer_(settings.output_dir, "particles"),
-        probes_(spec, scene.particles, settings.output_dir + "/probes.csv") {
+        probes_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/probes.csv" : std::string(),
+                appends("probes.csv")) {
     MPI_Comm_rank(comm, &rank_);
+    MPI_Comm_size(comm, &n_ranks_);
     log_ = rank_ == 0 && !settings.quiet;
     tty_ = log_ && isatty(fileno(stdout));
     const bool has_fluid = p_.n_of_kind(ParticleKind::fluid) > 0, has_solid = p_.n_of_kind(ParticleKind::solid) > 0;
     if (has_fluid)
       fluid_ = std::make_unique<FluidSolver>(spec, p_, comm, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
     if (has_solid) solid_ = std::make_unique<SolidSolver>(spec, p_);
-    if (solid_ && rank_ == 0) solid_->set_output_directory(settings.output_dir);  // fragments.csv
+    if (solid_ && rank_ == 0) solid_->set_output_directory(settings.output_dir, appends("fragments.csv"));
     if (fluid_ && solid_) {
       FsiOptions fo;
       fo.load_relaxation = spec.coupling.load_relaxation;
       solid_->set_damping(spec.coupling.solid_damping);
       coupling_ = std::make_unique<FsiInterface>(spec, p_, fo);
       coupling_->initialize();
-      if (rank_ == 0) coupling_->open_csv(settings.output_dir + "/interface.csv");
+      if (rank_ == 0) coupling_->open_csv(settings.output_dir + "/interface.csv", appends("interface.csv"));
     }
     writer_.set_fields(spec.output.fields);
     summary_.pvd_path = writer_.pvd_path();
     if (rank_ == 0) {
-      jsonl_.open(settings.output_dir + "/run.jsonl");
+      jsonl_.open(settings.output_dir + "/run.jsonl", appends("run.jsonl") ? std::ios::app : std::ios::trunc);
       if (!jsonl_) throw std::runtime_error("cannot write " + settings.output_dir + "/run.jsonl");
     }
+    next_output_ = spec.output.interval;
+    if (settings.restart) load_checkpoint(*settings.restart);
   }
 
   RunSummary run() {
     const auto t_start = Clock::now();
-    write_output();
-    Real next_output = spec_.output.interval;
+    t_begin_ = t_;
+    step_begin_ = step_;
+    if (!settings_.restart) write_output();
     const Real eps = 1e-12 * std::max<Real>(1, spec_.time.end);
+    const Real every = settings_.checkpoint_every;
+    const auto next_checkpoint_after = [&](const Real t) { return (std::floor((t + eps) / every) + 1) * every; };
+    Real next_checkpoint = every > 0 ? next_checkpoint_after(t_) : 0;
+    Real last_checkpoint = settings_.restart ? t_ : -1;
     while (t_ < spec_.time.end - eps) {
       last_good_ = p_;  // the frame written if this step fails
       step();
       report_progress(t_start, false);
-      if (t_ >= next_output - eps) {
+      if (t_ >= next_output_ - eps) {
         write_output();
-        while (next_output <= t_ + eps) next_output += spec_.output.interval;
+        while (next_output_ <= t_ + eps) next_output_ += spec_.output.interval;
+      }
+      if (every > 0 && t_ >= next_checkpoint - eps) {
+        write_checkpoint_now();
+        last_checkpoint = t_;
+        next_checkpoint = next_checkpoint_after(t_);
       }
     }
+    if (every > 0 && last_checkpoint != t_) write_checkpoint_now();  // the end state, to extend the run
     report_progress(t_start, true);
     summary_.n_steps = step_;
     summary_.end_time = t_;
@@ -254,9 +275,11 @@ class RunLoop {
     if (rank_ != 0) return;
     const bool periodic = step_ % static_cast<std::size_t>(std::max(1, settings_.log_every)) == 0 || step_ == 1;
     const double wall = seconds_since(t_start);
-    const double rate = wall > 0 ? static_cast<double>(step_) / wall : 0;
+    const double rate = wall > 0 ? static_cast<double>(step_ - step_begin_) / wall : 0;
     const double frac = spec_.time.end > 0 ? t_ / spec_.time.end : 1;
-    const double eta = frac > 0 ? wall * (1 - frac) / frac : -1;
+    // ETA from this session's progress (a restarted run began at t_begin_).
+    const double done = spec_.time.end > t_begin_ ? (t_ - t_begin_) / (spec_.time.end - t_begin_) : 1;
+    const double eta = done > 0 ? wall * (1 - done) / done : -1;
     std::string ppe, sub;
     if (fluid_) ppe = fmt::format(", PPE {} it (res {:.1e})", last_fluid_.iterations, last_fluid_.residual);
     if (fluid_ && solid_)
@@ -279,6 +302,129 @@ class RunLoop {
       }
     } else if (periodic || final) {
       fmt::print("{}\n", line);
+    }
+  }
+
+  static int rank_of(MPI_Comm comm) {
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    return rank;
+  }
+
+  bool appends(const std::string& file) const {
+    return std::find(settings_.append_files.begin(), settings_.append_files.end(), file) != settings_.append_files.end();
+  }
+
+  /// The run loop's own state: everything that decides the coming steps and outputs.
+  void save_run_state(BinaryWriter& w) const {
+    w.section("run");
+    w.f64(t_);
+    w.u64(step_);
+    w.f64(dt_);
+    w.string(limit_);
+    w.f64(next_output_);
+    w.u64(summary_.n_removed);
+    w.u64(summary_.n_subcycles_raised);
+    w.i64(summary_.last_subcycles);
+    w.f64(summary_.last_solid_dt);
+    w.boolean(raised_said_);
+    w.i64(last_fluid_.iterations);
+    w.f64(last_fluid_.residual);
+    w.boolean(fluid_ != nullptr);
+    w.boolean(solid_ != nullptr);
+    w.boolean(coupling_ != nullptr);
+  }
+
+  /// Writes checkpoint_<t>.chk into the output folder (rank 0; every rank holds the same state).
+  void write_checkpoint_now() {
+    const auto t0 = Clock::now();
+    if (rank_ != 0) return;
+    BinaryWriter w;
+    save_run_state(w);
+    p_.save_state(w);
+    if (fluid_) fluid_->save_state(w);
+    if (solid_) solid_->save_state(w);
+    if (coupling_) coupling_->save_state(w);
+    w.section("end");
+    jsonl_.flush();
+    CheckpointInfo info;
+    info.case_name = spec_.name;
+    info.case_file = spec_.file;
+    std::error_code ec;
+    const auto dir = std::filesystem::absolute(std::filesystem::path(spec_.file).parent_path(), ec);
+    info.case_dir = ec ? std::string(".") : dir.lexically_normal().string();
+    info.resolved_yaml = spec_.resolved_yaml;
+    info.time = t_;
+    info.step = step_;
+    info.n_particles = p_.size();
+    info.n_ranks = n_ranks_;
+    info.next_frame = writer_.next_frame();
+    info.frames = writer_.frames();
+    info.outputs = mark_outputs(settings_.output_dir, {"probes.csv", "interface.csv", "fragments.csv", "run.jsonl"});
+    const std::time_t now = std::time(nullptr);
+    char date[64] = "";
+    std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S %z", std::localtime(&now));
+    info.written_at = date;
+    const std::string path = (std::filesystem::path(settings_.output_dir) / checkpoint_file_name(t_)).string();
+    write_checkpoint(path, info, w.bytes());
+    jsonl_ << fmt::format("{{\"event\":\"checkpoint\",\"step\":{},\"t\":{:.9g},\"file\":\"{}\"}}\n", step_, t_,
+                          json_escape(path));
+    jsonl_.flush();
+    if (log_)
+      fmt::print("{}checkpoint at t = {:.6g} s (step {}): {} ({:.1f} MiB)\n", tty_ ? "\n" : "", t_, step_, path,
+                 static_cast<double>(w.bytes().size()) / (1024.0 * 1024.0));
+    written_.push_back(path);
+    while (settings_.checkpoint_keep > 0 && written_.size() > static_cast<std::size_t>(settings_.checkpoint_keep)) {
+      if (written_.front() != path) std::filesystem::remove(written_.front(), ec);
+      written_.pop_front();
+    }
+    summary_.t_output += seconds_since(t0);
+  }
+
+  /// Restart: the state of the checkpoint replaces the initial one (the solvers were built from the
+  /// initial scene, which gave them their reference data).
+  void load_checkpoint(const Checkpoint& c) {
+    BinaryReader in = c.payload();
+    try {
+      in.expect_section("run");
+      t_ = in.f64("the time");
+      step_ = in.u64("the step");
+      dt_ = in.f64("the time step");
+      limit_ = in.string("the time-step limit");
+      next_output_ = in.f64("the next output time");
+      summary_.n_removed = in.u64("the removed count");
+      summary_.n_subcycles_raised = in.u64("the raised-subcycles count");
+      summary_.last_subcycles = static_cast<int>(in.i64("the subcycles"));
+      summary_.last_solid_dt = in.f64("the solid time step");
+      raised_said_ = in.boolean("a log flag");
+      last_fluid_.iterations = static_cast<int>(in.i64("the pressure-solve iterations"));
+      last_fluid_.residual = in.f64("the pressure-solve residual");
+      const bool fluid = in.boolean("the fluid flag"), solid = in.boolean("the solid flag"),
+                 coupled = in.boolean("the coupling flag");
+      if (fluid != (fluid_ != nullptr) || solid != (solid_ != nullptr) || coupled != (coupling_ != nullptr))
+        in.fail("the checkpoint's run has other participants (fluid, solid, coupling) than this case");
+      p_.load_state(in);
+      if (fluid_) exact_ = fluid_->load_state(in);
+      if (solid_) solid_->load_state(in);
+      if (coupling_) coupling_->load_state(in);
+      in.expect_section("end");
+      if (!in.at_end()) in.fail("unexpected data after the state");
+    } catch (const StateFormatError& e) {
+      throw CaseError(std::string("checkpoint ") + e.what());
+    }
+    if (!exact_ && log_)
+      fmt::print("note: the pressure preconditioner the checkpoint's run kept between setups "
+                 "(fluid.preconditioner_rebuild_every > 1) cannot be rebuilt here (it was saved on several ranks, or "
+                 "the setting changed) and is set up anew: the continuation agrees with the original run to the "
+                 "solver tolerance, not bit for bit\n");
+    if (rank_ == 0) {
+      if (settings_.continue_series)
+        writer_.adopt_existing(t_, c.info.next_frame);
+      else
+        writer_.set_next_frame(c.info.next_frame);
+      jsonl_ << fmt::format("{{\"event\":\"restart\",\"step\":{},\"t\":{:.9g},\"checkpoint\":\"{}\"}}\n", step_, t_,
+                            json_escape(c.path));
+      jsonl_.flush();
     }
   }
 
@@ -313,8 +459,14 @@ class RunLoop {
   FluidStepReport last_fluid_;
   RunSummary summary_;
   Real t_ = 0, dt_ = 0;
+  Real next_output_ = 0;               ///< time of the next frame (accumulated: saved, not recomputed)
   std::string limit_ = "-";
   std::size_t step_ = 0;
+  int n_ranks_ = 1;
+  Real t_begin_ = 0;                   ///< time and step at the start of this session (restart)
+  std::size_t step_begin_ = 0;
+  std::deque<std::string> written_;    ///< checkpoints this run wrote, oldest first
+  bool exact_ = true;                  ///< restart: the coming steps are bit for bit the original run's
 };
 
 }  // namespace

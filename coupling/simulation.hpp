@@ -2,7 +2,8 @@
 // advances the fluid, advances the solid by N sub-steps of dt/N, checks the state, and writes frames
 // and probes at the output interval. It also reports progress (an updating line on a terminal, plain
 // lines otherwise), writes a JSON-lines run log, and stops with a diagnosis (and the last good frame)
-// when the state becomes invalid. Only this folder sees both the fluid and the solid.
+// when the state becomes invalid. It writes checkpoints of the complete state and continues a run from one
+// (coupling/checkpoint.hpp). Only this folder sees both the fluid and the solid.
 #pragma once
 
 #include "io/case.hpp"
@@ -12,13 +13,29 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace mpsfsi {
+
+struct Checkpoint;
 
 struct RunSettings {
   std::string output_dir;
   bool quiet = false;
   int log_every = 100;          ///< steps between plain log lines (when stdout is not a terminal)
+  /// Simulated seconds between checkpoints (checkpoint_<t>.chk in output_dir, at the end of the first step
+  /// reaching each multiple of it, and at the end of the run); 0: none.
+  Real checkpoint_every = 0;
+  int checkpoint_keep = 0;      ///< keep only the newest N checkpoints this run wrote; 0: all
+  /// Continue from this checkpoint (coupling/checkpoint.hpp) instead of the initial state. The scene must
+  /// be the case's initial scene: the reference data (bonds, initial densities, wall and probe
+  /// references) are rebuilt from it before the state is loaded.
+  const Checkpoint* restart = nullptr;
+  /// Restart: output files of output_dir to continue (truncated to their checkpoint size by
+  /// prepare_restart_outputs); the others are started anew. The .pvd series is continued when
+  /// continue_series, else started anew with the checkpoint's frame numbering.
+  std::vector<std::string> append_files;
+  bool continue_series = false;
 };
 
 struct RunSummary {

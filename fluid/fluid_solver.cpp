@@ -7,6 +7,7 @@
 // Every rank holds all particles and does the same explicit work; only the PPE rows are distributed.
 #include "fluid/fluid_solver.hpp"
 
+#include "core/binary_io.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "fluid/pressure_solver.hpp"
@@ -515,6 +516,25 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   const double total = seconds_since(t_begin);
   report.t_rest = total - report.t_neighbours - report.t_assembly - report.t_setup - report.t_solve;
   return report;
+}
+
+void FluidSolver::save_state(BinaryWriter& out) const {
+  out.section("fluid");
+  out.u64(impl_->n_steps);
+  out.i64(impl_->opt.reorder_every);
+  impl_->solver->save_state(out);
+}
+
+bool FluidSolver::load_state(BinaryReader& in) {
+  in.expect_section("fluid");
+  const std::size_t n_steps = in.u64("the fluid step count");
+  const auto reorder = in.i64("the reorder interval");
+  if (reorder != impl_->opt.reorder_every)
+    in.fail("the checkpoint's fluid reordered the particles every " + std::to_string(reorder) + " steps, this run every " +
+            std::to_string(impl_->opt.reorder_every));
+  const bool exact = impl_->solver->load_state(in);
+  impl_->n_steps = n_steps;
+  return exact;
 }
 
 std::size_t FluidSolver::memory_bytes() const {

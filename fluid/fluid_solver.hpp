@@ -69,6 +69,15 @@ class FluidSolver {
   /// Bytes held by the fluid's work arrays, neighbour list, matrix and preconditioner on this rank.
   std::size_t memory_bytes() const;
 
+  /// Checkpoints: what the fluid carries from step to step besides the particle arrays (the step count
+  /// that times the cell reordering, the pressure solver's state). Everything else is rebuilt at every
+  /// step or derived from the initial scene (the walls' reference positions), which a restarted run
+  /// rebuilds before it loads the state. All ranks call both.
+  void save_state(BinaryWriter& out) const;
+  /// Returns false when the coming steps cannot be bit for bit those of the original run (see
+  /// PressureSolver::load_state).
+  bool load_state(BinaryReader& in);
+
   /// Diagnostics and tests: this rank's rows of the last pressure system, the particle (local index at
   /// the time of the solve) of each row, and the lattice constants used (density/gradient, Laplacian).
   const LocalRows& last_system() const;

@@ -17,6 +17,9 @@
 
 namespace mpsfsi {
 
+class BinaryWriter;
+class BinaryReader;
+
 struct PressureSolverSettings {
   std::string solver = "cg";              ///< cg | gmres
   /// muelu | chebyshev | ilu | jacobi | sgs | ssor | none. sgs and ssor (symmetric Gauss-Seidel with
@@ -84,6 +87,14 @@ class PressureSolver {
   virtual PressureSolveResult solve(const LocalRows& system, std::vector<Real>& x) = 0;
   /// Bytes held by the matrix and the preconditioner on this rank (estimate).
   virtual std::size_t memory_bytes() const = 0;
+  /// Checkpoints: the state carried from one solve to the next (setup counters, eigenvalue estimate and,
+  /// for a preconditioner kept between setups (rebuild_every > 1, muelu or ilu), this rank's rows of the
+  /// matrix it was set up on, from which load_state's run rebuilds the same preconditioner).
+  virtual void save_state(BinaryWriter& out) const = 0;
+  /// Restores what save_state wrote; throws StateFormatError when it does not fit these settings. Returns
+  /// false when the next solves cannot be bit for bit those of the original run: a kept preconditioner
+  /// saved on several ranks is set up anew at the next solve (the solution agrees to the tolerance).
+  virtual bool load_state(BinaryReader& in) = 0;
 };
 
 /// Throws std::invalid_argument naming the bad setting.

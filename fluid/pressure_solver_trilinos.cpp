@@ -9,6 +9,8 @@
 // residual is checked after every solve and the solution is gathered to every rank.
 #include "fluid/pressure_solver.hpp"
 
+#include "core/binary_io.hpp"
+
 #include <BelosLinearProblem.hpp>
 #include <BelosSolverFactory.hpp>
 #include <BelosTpetraAdapter.hpp>
@@ -264,6 +266,78 @@ class TrilinosPressureSolver final : public PressureSolver {
     return bytes;
   }
 
+  void save_state(BinaryWriter& out) const override {
+    out.section("pressure_solver");
+    out.string(settings_.preconditioner);
+    out.u64(solves_since_setup_);
+    out.i64(iterations_after_setup_);
+    out.boolean(force_setup_);
+    out.f64(lambda_max_);
+    out.u64(map_rows_);
+    out.u64(n_solves_);
+    // A kept preconditioner: the matrix it was set up on (one rank: all rows), to build it again on load.
+    const bool kept = keeps_setup() && !(settings_.preconditioner == "muelu" ? muelu_.is_null() : ifpack_.is_null());
+    const bool saved = kept && n_ranks_ == 1;
+    out.boolean(kept);
+    out.boolean(saved);
+    if (!saved) return;
+    out.u64(setup_sys_.n_global_rows);
+    out.u64(setup_sys_.rows.begin);
+    out.u64(setup_sys_.rows.end);
+    out.array(setup_sys_.row_ptr);
+    out.array(setup_sys_.col);
+    out.array(setup_sys_.value);
+  }
+
+  bool load_state(BinaryReader& in) override {
+    in.expect_section("pressure_solver");
+    const std::string prec = in.string("the preconditioner");
+    const std::size_t since = in.u64("the solves since the preconditioner setup");
+    const int iterations = static_cast<int>(in.i64("the iterations after the setup"));
+    const bool force = in.boolean("the setup flag");
+    const double lambda = in.f64("the eigenvalue bound");
+    const std::size_t rows = in.u64("the row count");
+    n_solves_ = in.u64("the solve count");
+    const bool kept = in.boolean("the kept-preconditioner flag");
+    const bool saved = in.boolean("the setup-matrix flag");
+    LocalRows s;
+    if (saved) {
+      s.n_global_rows = in.u64("the setup matrix size");
+      s.rows.begin = in.u64("the setup matrix rows");
+      s.rows.end = in.u64("the setup matrix rows");
+      s.row_ptr = in.array<std::size_t>("the setup matrix rows");
+      s.col = in.array<GlobalId>("the setup matrix columns");
+      s.value = in.array<Real>("the setup matrix values", s.col.size());
+      if (s.rows.end < s.rows.begin || s.rows.end > s.n_global_rows || s.row_ptr.size() != s.rows.size() + 1 ||
+          s.row_ptr.back() != s.col.size())
+        in.fail("the pressure solver's setup matrix is inconsistent");
+      for (const GlobalId c : s.col)
+        if (c < 0 || static_cast<std::size_t>(c) >= s.n_global_rows) in.fail("the pressure solver's setup matrix is inconsistent");
+    }
+    restore_pending_ = false;
+    map_rows_ = rows;
+    if (prec != settings_.preconditioner) {  // a restart that changes the preconditioner: a fresh start
+      solves_since_setup_ = 0;
+      iterations_after_setup_ = 0;
+      force_setup_ = true;
+      lambda_max_ = 0;
+      return true;  // not the original run, but by the user's choice (reported with the case change)
+    }
+    solves_since_setup_ = since;
+    iterations_after_setup_ = iterations;
+    force_setup_ = force;
+    lambda_max_ = lambda;
+    if (saved) {
+      setup_sys_ = std::move(s);
+      restore_pending_ = n_ranks_ == 1 && keeps_setup();
+    }
+    if (kept && !restore_pending_) {
+      force_setup_ = true;  // the kept preconditioner cannot be rebuilt here: set up anew
+      return false;
+    }
+    return true;
+  }
+
   PressureSolveResult solve(const LocalRows& sys, std::vector<Real>& x) override {
     PressureSolveResult result;
     auto t0 = Clock::now();
@@ -294,7 +368,7 @@ class TrilinosPressureSolver final : public PressureSolver {
       result.tolerance = std::max(result.tolerance, std::min<Scalar>(0.1, sys.absolute_tolerance / bnorm[0]));
     set_belos_tolerance(result.tolerance);
     if (eisenstat_) return solve_eisenstat(sys, x, result, bnorm[0], t0);
-    RCP<OP> prec = setup_preconditioner();
+    RCP<OP> prec = setup_preconditioner(sys);
     result.t_setup = seconds_since(t0);
 
     t0 = Clock::now();
@@ -448,6 +522,9 @@ class TrilinosPressureSolver final : public PressureSolver {
 
   void build_matrix(const LocalRows& sys) {
     const std::size_t n_own = sys.rows.size();
+    // Chebyshev's bound belongs to a matrix of the old row count (map_rows_ survives a restart, the map not).
+    if (map_rows_ != sys.n_global_rows) lambda_max_ = 0;
+    map_rows_ = sys.n_global_rows;
     if (row_map_.is_null() || row_map_->getGlobalNumElements() != sys.n_global_rows) {
       row_map_ = rcp(new Map(static_cast<Tpetra::global_size_t>(sys.n_global_rows), n_own, 0, comm_));
       x_ = rcp(new MV(row_map_, 1));
@@ -503,37 +580,78 @@ class TrilinosPressureSolver final : public PressureSolver {
     A_->expertStaticFillComplete(row_map_, row_map_, importer_);
   }
 
-  /// The preconditioner for this solve: a full setup when due, else the kept one.
-  RCP<OP> setup_preconditioner() {
+  /// A preconditioner (muelu, ilu) kept as built between setups, which a checkpoint saves by its matrix.
+  bool keeps_setup() const {
+    return rebuild_every_ > 1 && (settings_.preconditioner == "muelu" || settings_.preconditioner == "ilu");
+  }
+
+  /// The matrix of `sys` on one rank (the setup matrix a restart rebuilds a kept preconditioner from).
+  RCP<Matrix> serial_matrix(const LocalRows& sys) const {
+    using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
+    using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
+    using Values = Matrix::local_matrix_device_type::values_type;
+    const std::size_t n = sys.rows.size(), nnz = sys.col.size();
+    RowPtr ptr(Kokkos::ViewAllocateWithoutInitializing("ptr"), n + 1);
+    Entries ind(Kokkos::ViewAllocateWithoutInitializing("ind"), nnz);
+    Values val(Kokkos::ViewAllocateWithoutInitializing("val"), nnz);
+    for (std::size_t k = 0; k <= n; ++k) ptr(k) = sys.row_ptr[k];
+    for (std::size_t k = 0; k < nnz; ++k) ind(k) = static_cast<LO>(sys.col[k]);
+    for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
+    auto A = rcp(new Matrix(row_map_, row_map_, ptr, ind, val));
+    A->expertStaticFillComplete(row_map_, row_map_);
+    return A;
+  }
+
+  RCP<MueLu::TpetraOperator<Scalar, LO, GO, Node>> make_muelu(const RCP<Matrix>& A) const {
+    Teuchos::ParameterList params;
+    params.set("verbosity", std::string("none"));
+    params.set("multigrid algorithm", std::string("sa"));
+    params.set("coarse: type", std::string("RELAXATION"));
+    params.set("coarse: max size", 64);
+    // MueLu 13.2's phase-1 aggregation (AggregationPhase1Algorithm::BuildAggregates) sizes its scratch
+    // list by the longest matrix row and writes one past it when an aggregate reaches that size
+    // (valgrind: "Invalid write of size 4 ... 0 bytes after a block"; heap corruption on 2 ranks).
+    // Capping the aggregate size well below the row length (~45 at re = 4 l0) keeps it in bounds;
+    // 2D smoothed aggregation builds aggregates of about 9-25 nodes anyway.
+    params.set("aggregation: max agg size", 24);
+    params.set("smoother: type", std::string("CHEBYSHEV"));
+    params.setParameters(prec_params_);
+    RCP<OP> A_op = A;
+    return MueLu::CreateTpetraPreconditioner(A_op, params);
+  }
+
+  /// The preconditioner for this solve: a full setup when due, else the kept one (right after a restart
+  /// rebuilt, identically, from the matrix it was set up on).
+  RCP<OP> setup_preconditioner(const LocalRows& sys) {
     const std::string& p = settings_.preconditioner;
     if (p == "none") return Teuchos::null;
+    // A restart rebuilds the kept preconditioner unless the row count changed since its setup (the
+    // original run dropped it then, as build_matrix does).
+    const bool restore = restore_pending_ && setup_sys_.n_global_rows == sys.n_global_rows;
+    restore_pending_ = false;
+    // Chebyshev keeps only its eigenvalue bound (reset with the row map).
+    const bool missing = p == "muelu" ? muelu_.is_null() : p == "chebyshev" ? !(lambda_max_ > 0) : ifpack_.is_null();
     const bool due = force_setup_ || solves_since_setup_ >= static_cast<std::size_t>(rebuild_every_) ||
-                     (p == "muelu" ? muelu_.is_null() : ifpack_.is_null());
+                     (missing && !restore);
+    // The power iterations of Chebyshev (also MueLu's smoother) start from Tpetra's randomize(), which
+    // seeds from std::rand(): reseed, so that a setup depends on the matrix only, not on how many setups
+    // came before (a restarted run then reproduces the uninterrupted one bit for bit).
+    std::srand(1);
+    if (due && keeps_setup()) setup_sys_ = sys;  // saved by a checkpoint to rebuild the kept preconditioner
     if (p == "muelu") {
       if (due) {
-        Teuchos::ParameterList params;
-        params.set("verbosity", std::string("none"));
-        params.set("multigrid algorithm", std::string("sa"));
-        params.set("coarse: type", std::string("RELAXATION"));
-        params.set("coarse: max size", 64);
-        // MueLu 13.2's phase-1 aggregation (AggregationPhase1Algorithm::BuildAggregates) sizes its scratch
-        // list by the longest matrix row and writes one past it when an aggregate reaches that size
-        // (valgrind: "Invalid write of size 4 ... 0 bytes after a block"; heap corruption on 2 ranks).
-        // Capping the aggregate size well below the row length (~45 at re = 4 l0) keeps it in bounds;
-        // 2D smoothed aggregation builds aggregates of about 9-25 nodes anyway.
-        params.set("aggregation: max agg size", 24);
-        params.set("smoother: type", std::string("CHEBYSHEV"));
-        params.setParameters(prec_params_);
-        RCP<OP> A_op = A_;
-        muelu_ = MueLu::CreateTpetraPreconditioner(A_op, params);
+        muelu_ = make_muelu(A_);
         mark_setup();
+      } else if (restore) {
+        muelu_ = make_muelu(serial_matrix(setup_sys_));
       }
       precond_bytes_ = 2 * A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO));  // rough: P, R, coarse A
       return muelu_;
     }
     // Jacobi and SGS: always on the new matrix. Chebyshev: on the new matrix, with the kept eigenvalue
     // estimate between full setups. ILU(0): kept as built.
-    if (p == "ilu" && !due) return ifpack_;
+    if (p == "ilu" && !due && !restore) return ifpack_;
+    const RCP<Matrix> A = p == "ilu" && !due ? serial_matrix(setup_sys_) : A_;
     Teuchos::ParameterList params;
     std::string type;
     if (p == "jacobi" || p == "sgs" || p == "ssor") {  // sgs / ssor here only with "sgs: ifpack2" = true
@@ -559,7 +677,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     }
     params.setParameters(prec_params_);
     Ifpack2::Factory factory;
-    ifpack_ = factory.create<Tpetra::RowMatrix<Scalar>>(type, A_);
+    ifpack_ = factory.create<Tpetra::RowMatrix<Scalar>>(type, A);
     ifpack_->setParameters(params);
     ifpack_->initialize();
     ifpack_->compute();
@@ -621,6 +739,9 @@ class TrilinosPressureSolver final : public PressureSolver {
   int iterations_after_setup_ = 0;
   bool force_setup_ = false;
   double lambda_max_ = 0;  ///< Chebyshev: the eigenvalue bound of the last full setup
+  std::size_t map_rows_ = 0;  ///< rows of the last system
+  LocalRows setup_sys_;    ///< kept preconditioners (keeps_setup()): the rows of the matrix of the last setup
+  bool restore_pending_ = false;  ///< after load_state: rebuild the kept preconditioner from setup_sys_
   Teuchos::ParameterList prec_params_, belos_params_;
   RCP<const Map> col_map_;
   RCP<const Tpetra::Import<LO, GO, Node>> importer_;

@@ -186,8 +186,30 @@ struct CaseSpec {
 /// Parse and check a case file; `overrides` are "dotted.key=value" strings (--set), applied before
 /// checking. Throws CaseError with file, line, key and the expected form on any bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
-/// Same, from YAML text (`name` stands for the file in messages).
+/// Same, from YAML text (`name` stands for the file in messages; relative paths in the case, e.g. a
+/// tank-motion table, are relative to base_dir).
 CaseSpec parse_case(const std::string& yaml_text, const std::string& name,
-                    const std::vector<std::string>& overrides = {});
+                    const std::vector<std::string>& overrides = {}, const std::string& base_dir = ".");
+
+/// Keys of a case that a restart may change freely (with --set or --end-time): time.end, output (interval,
+/// fields), description and source.
+const std::vector<std::string>& restart_free_keys();
+/// Numerical controls a restart may change, e.g. to continue with a smaller time step after a run went
+/// unstable: time.cfl, time.dt, time.dt_max, coupling.subcycles, fluid.solver, fluid.preconditioner,
+/// fluid.tolerance, fluid.max_iterations, fluid.preconditioner_rebuild_every, solid.dt, solid.dt_factor. The
+/// continuation then is not the original run's. Every other key must equal the checkpoint's case.
+const std::vector<std::string>& restart_tunable_keys();
+/// True when `key` (dotted, e.g. "time.cfl" or "bodies[0].name") is one of `roots` or lies below one.
+bool key_under(const std::string& key, const std::vector<std::string>& roots);
+
+/// One leaf of a case whose value differs between two cases.
+struct CaseDifference {
+  std::string key;  ///< dotted path, e.g. "bodies[1].rectangle.max[0]"
+  std::string a, b; ///< the values as written; "(absent)" for a missing key
+  std::string text() const { return key + ": " + a + " vs " + b; }
+};
+/// The differences between two resolved cases (CaseSpec::resolved_yaml) outside restart_free_keys(), by
+/// key (numbers compare by value). Empty: the same case for a restart.
+std::vector<CaseDifference> case_differences(const std::string& yaml_a, const std::string& yaml_b);
 
 }  // namespace mpsfsi

@@ -1078,8 +1078,75 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
   return parse(text.str(), path, dir.empty() ? fs::path(".") : dir, overrides);
 }
 
-CaseSpec parse_case(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
-  return parse(yaml_text, name, fs::path("."), overrides);
+CaseSpec parse_case(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides,
+                    const std::string& base_dir) {
+  return parse(yaml_text, name, fs::path(base_dir.empty() ? std::string(".") : base_dir), overrides);
+}
+
+namespace {
+
+/// Every leaf of a YAML tree as "dotted.key[i]" -> value text.
+void flatten(const YAML::Node& node, const std::string& key, std::map<std::string, std::string>& out) {
+  if (node.IsMap()) {
+    if (node.size() == 0) out[key] = "{}";
+    for (const auto& kv : node) flatten(kv.second, key.empty() ? kv.first.Scalar() : key + "." + kv.first.Scalar(), out);
+  } else if (node.IsSequence()) {
+    if (node.size() == 0) out[key] = "[]";
+    for (std::size_t i = 0; i < node.size(); ++i) flatten(node[i], key + "[" + std::to_string(i) + "]", out);
+  } else if (node.IsNull() || !node.IsDefined()) {
+    out[key] = "~";
+  } else {
+    out[key] = node.Scalar();
+  }
+}
+
+bool same_value(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  char* end_a = nullptr;
+  char* end_b = nullptr;
+  const double x = std::strtod(a.c_str(), &end_a), y = std::strtod(b.c_str(), &end_b);
+  return !a.empty() && !b.empty() && *end_a == '\0' && *end_b == '\0' && x == y;
+}
+
+}  // namespace
+
+const std::vector<std::string>& restart_free_keys() {
+  static const std::vector<std::string> keys = {"time.end", "output", "description", "source"};
+  return keys;
+}
+
+const std::vector<std::string>& restart_tunable_keys() {
+  static const std::vector<std::string> keys = {
+      "time.cfl",       "time.dt",         "time.dt_max",         "coupling.subcycles",
+      "fluid.solver",   "fluid.preconditioner", "fluid.tolerance", "fluid.max_iterations",
+      "fluid.preconditioner_rebuild_every", "solid.dt", "solid.dt_factor"};
+  return keys;
+}
+
+bool key_under(const std::string& key, const std::vector<std::string>& roots) {
+  for (const auto& k : roots)
+    if (key == k || key.rfind(k + ".", 0) == 0 || key.rfind(k + "[", 0) == 0) return true;
+  return false;
+}
+
+std::vector<CaseDifference> case_differences(const std::string& yaml_a, const std::string& yaml_b) {
+  std::map<std::string, std::string> a, b;
+  flatten(YAML::Load(yaml_a), "", a);
+  flatten(YAML::Load(yaml_b), "", b);
+  std::map<std::string, CaseDifference> diffs;  // sorted by key
+  for (const auto& [key, value] : a) {
+    if (key_under(key, restart_free_keys())) continue;
+    const auto it = b.find(key);
+    if (it == b.end())
+      diffs[key] = {key, value, "(absent)"};
+    else if (!same_value(value, it->second))
+      diffs[key] = {key, value, it->second};
+  }
+  for (const auto& [key, value] : b)
+    if (!key_under(key, restart_free_keys()) && !a.count(key)) diffs[key] = {key, "(absent)", value};
+  std::vector<CaseDifference> out;
+  for (auto& kv : diffs) out.push_back(std::move(kv.second));
+  return out;
 }
 
 }  // namespace mpsfsi

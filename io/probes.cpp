@@ -24,7 +24,7 @@ Real fluid_extent(const ParticleSet& p, const int axis, const Real limit, const 
 }
 }  // namespace
 
-ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path)
+ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path, const bool append)
     : dp_(spec.dp), tank_(make_tank_motion(spec.tank_motion)) {
   for (const auto& ps : spec.probes) {
     Probe p{ps, -1, Vec::Zero()};
@@ -47,9 +47,10 @@ ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, con
     }
     probes_.push_back(p);
   }
-  if (probes_.empty()) return;
-  out_.open(path);
+  if (probes_.empty() || path.empty()) return;
+  out_.open(path, append ? std::ios::app : std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write probe file " + path);
+  if (append) return;
   out_ << "time";
   for (const auto& c : columns_) out_ << "," << c;
   out_ << "\n";
@@ -98,7 +99,7 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t) cons
 }
 
 void ProbeWriter::record(const Real t, const ParticleSet& particles) {
-  if (probes_.empty()) return;
+  if (probes_.empty() || !out_.is_open()) return;
   out_ << fmt::format("{:.9g}", t);
   for (const Real v : evaluate(particles, t)) out_ << fmt::format(",{:.9g}", v);
   out_ << "\n";

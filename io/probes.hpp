@@ -15,9 +15,11 @@ namespace mpsfsi {
 
 class ProbeWriter {
  public:
-  /// Opens `path` and writes the header; the displacement probes lock onto the particle of their body
-  /// nearest to the probe position in `particles` (the initial state).
-  ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path);
+  /// Opens `path` and writes the header (append: continues an existing file without a header, for a
+  /// restarted run; an empty path: no file, record() does nothing, e.g. on MPI ranks other than 0); the
+  /// displacement probes lock onto the particle of their body nearest to the probe position in
+  /// `particles` (the initial state).
+  ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path, bool append = false);
   bool empty() const { return probes_.empty(); }
   /// Append one row at time t.
   void record(Real t, const ParticleSet& particles);

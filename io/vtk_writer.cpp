@@ -361,12 +361,12 @@ void VtkSeriesWriter::write_pvd() const {
   rename_into_place(tmp_path, pvd_path_);
 }
 
-void VtkSeriesWriter::adopt_existing(const double up_to_time) {
+void VtkSeriesWriter::adopt_existing(const double up_to_time, const std::size_t first_new_frame) {
   if (std::isnan(up_to_time)) {
     throw std::invalid_argument(fmt::format("VTK output '{}': restart time is NaN", pvd_path_));
   }
   frames_.clear();
-  next_frame_ = 0;
+  next_frame_ = first_new_frame;
   std::error_code ec;
   if (!fs::exists(pvd_path_, ec)) return;
 

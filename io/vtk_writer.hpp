@@ -31,15 +31,21 @@ class VtkSeriesWriter {
   std::string write(const ParticleSet& particles, double time);
 
   std::size_t n_frames() const { return frames_.size(); }
+  /// The series so far: (time, .vtu name relative to the .pvd) per frame.
+  const std::vector<std::pair<double, std::string>>& frames() const { return frames_; }
   const std::string& pvd_path() const { return pvd_path_; }
   const std::string& directory() const { return directory_; }
 
   /// Restart support: adopt existing frames with time <= t from an existing .pvd (so a continued
   /// run appends after them; later frames are dropped from the series and their files are
   /// overwritten by the new frames). The .pvd is rewritten at once to list only the adopted frames.
-  /// No .pvd: nothing is adopted and the series starts empty. Throws std::runtime_error if the .pvd
-  /// exists but cannot be read or rewritten.
-  void adopt_existing(double up_to_time);
+  /// No .pvd: nothing is adopted and the series starts empty. New frames are numbered from
+  /// first_new_frame at least (a restart into a new folder keeps the frame numbers of the original run).
+  /// Throws std::runtime_error if the .pvd exists but cannot be read or rewritten.
+  void adopt_existing(double up_to_time, std::size_t first_new_frame = 0);
+  /// Number the next frame `frame` (a restart that starts a new series keeps the original numbering).
+  void set_next_frame(std::size_t frame) { next_frame_ = frame; }
+  std::size_t next_frame() const { return next_frame_; }
 
  private:
   void write_pvd() const;

@@ -23,6 +23,7 @@
 // * Bonds are stored once per pair (j > i) in CSR with r0, 1/|r0|, w0/|r0| and the pair stiffness.
 #include "solid/solid_solver.hpp"
 
+#include "core/binary_io.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "io/tank_motion_spec.hpp"
@@ -576,9 +577,39 @@ SolidStepReport SolidSolver::advance(const Real t, const Real dt) {
   return impl_->advance(t, dt);
 }
 
-void SolidSolver::set_output_directory(const std::string& dir) {
+void SolidSolver::set_output_directory(const std::string& dir, const bool append) {
   impl_->out_dir = dir;
-  impl_->csv_started = false;
+  impl_->csv_started = append;
+}
+
+void SolidSolver::save_state(BinaryWriter& out) const {
+  const Impl& m = *impl_;
+  out.section("solid");
+  out.array(m.gid);
+  out.array(m.b_intact);
+  out.u64(m.n_broken);
+  out.array(m.n_now);
+  out.array(m.surface);
+}
+
+void SolidSolver::load_state(BinaryReader& in) {
+  Impl& m = *impl_;
+  in.expect_section("solid");
+  const auto gid = in.array<GlobalId>("the solid particle ids");
+  if (gid != m.gid)
+    in.fail(fmt::format("the checkpoint's solid has {} particles, this case's {} (or other ones)", gid.size(), m.gid.size()));
+  auto intact = in.array<std::uint8_t>("the bond flags");
+  if (intact.size() != m.b_intact.size())
+    in.fail(fmt::format("the checkpoint's solid has {} bonds, this case's {}", intact.size(), m.b_intact.size()));
+  const std::size_t n_broken = in.u64("the broken-bond count");
+  auto n_now = in.array<Real>("the number densities", m.n());
+  auto surface = in.array<std::uint8_t>("the surface flags", m.n());
+  m.b_intact.swap(intact);
+  m.n_broken = n_broken;
+  m.n_now.swap(n_now);
+  m.surface.swap(surface);
+  m.gather();  // the particle set was replaced: follow the global ids
+  m.compute_fragments();
 }
 
 void SolidSolver::prepare_output(const Real t) {

@@ -21,6 +21,9 @@
 
 namespace mpsfsi {
 
+class BinaryWriter;
+class BinaryReader;
+
 struct SolidStepReport {
   std::size_t n_broken = 0;    ///< bonds broken so far
   Real max_speed = 0;          ///< largest solid particle speed [m/s]
@@ -62,8 +65,17 @@ class SolidSolver {
   /// Called by the driver just before an output frame: refresh derived fields (stress, displacement,
   /// fragments) and append to fragments.csv when an output directory is set.
   void prepare_output(Real t);
-  /// Directory for fragments.csv (written at every prepare_output); empty: no file.
-  void set_output_directory(const std::string& dir);
+  /// Directory for fragments.csv (written at every prepare_output); empty: no file. append: continue an
+  /// existing file (a restarted run) instead of starting it with its header.
+  void set_output_directory(const std::string& dir, bool append = false);
+
+  /// Checkpoints: the solid's own state besides the particle arrays (position, velocity, rotation and
+  /// angular velocity are particle arrays): which bonds are broken, the current number densities and the
+  /// irreversible surface flags. The reference configuration (bonds, r0, masses) is rebuilt from the
+  /// initial scene, which a restarted run builds before it loads the state.
+  void save_state(BinaryWriter& out) const;
+  /// Throws StateFormatError when the checkpoint's solid has other particles or bonds.
+  void load_state(BinaryReader& in);
 
   SolidDiagnostics diagnostics() const;
   /// Number of fragments (connected components of intact bonds) at the last prepare_output.
