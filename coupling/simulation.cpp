@@ -291,6 +291,7 @@ class RunLoop {
           "{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\",\"ppe_iterations\":{},"
           "\"ppe_residual\":{:.3g},\"subcycles\":{},\"wall\":{:.3f}}}\n",
           step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.residual, summary_.last_subcycles, wall);
+      jsonl_.flush();  // `tail -f run.jsonl` follows the run
     }
     if (!log_) return;
     if (tty_) {
