@@ -17,28 +17,29 @@ import sys
 
 def extrema(t, y, t0, t1):
     """Crests and valleys of y in [t0, t1] as (time, value, +1 crest / -1 valley): the signal is cut into
-    half-cycles where it crosses its mean over the window with a hysteresis of 10 % of its range (so
-    ripples do not count), and the largest / smallest sample of each complete half-cycle is refined by a
-    parabola through it and its two neighbours."""
+    half-cycles where it crosses its mean over the window with a hysteresis of 10 % of its range over the
+    window (so ripples do not count), and the largest / smallest sample of each complete half-cycle is
+    refined by a parabola through it and its two neighbours."""
     idx = [i for i in range(len(t)) if t0 <= t[i] <= t1]
     if len(idx) < 3:
         return []
     mean = sum(y[i] for i in idx) / len(idx)
     band = 0.1 * (max(y[i] for i in idx) - min(y[i] for i in idx))
-    sign, start, cuts = 0, None, []
-    for i in idx:  # indices where the signal settles on the other side of the mean
+    # Half-cycles over the whole record (so one that begins before t0 is still seen whole); the extrema of
+    # the complete ones that fall inside [t0, t1] are kept.
+    sign, cuts = 0, []
+    for i in range(len(t)):  # indices where the signal settles on the other side of the mean
         s = 1 if y[i] > mean + band else -1 if y[i] < mean - band else 0
         if s != 0 and s != sign:
             cuts.append((i, s))
             sign = s
     out = []
-    for (a, s), (b, _) in zip(cuts, cuts[1:]):  # complete half-cycles only (the last one may be cut off)
-        # Extend back to the previous mean crossing, so the extremum is searched over the whole half-cycle.
+    for (a, s), (b, _) in zip(cuts[1:], cuts[2:]):  # complete half-cycles: the first one may have begun before the record
         lo = a
-        while lo > idx[0] and (y[lo - 1] - mean) * s > 0:
+        while lo > 0 and (y[lo - 1] - mean) * s > 0:  # back to the mean crossing
             lo -= 1
         k = max(range(lo, b), key=lambda i: s * y[i])
-        if k == 0 or k == len(y) - 1:
+        if k == 0 or k == len(y) - 1 or not t0 <= t[k] <= t1:
             continue
         den = y[k - 1] - 2 * y[k] + y[k + 1]
         f = 0.5 * (y[k - 1] - y[k + 1]) / den if den != 0 else 0.0
