@@ -26,6 +26,7 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "io/tank_motion_spec.hpp"
+#include "solid/sources.hpp"
 
 #include <fmt/format.h>
 
@@ -104,6 +105,13 @@ struct SolidSolver::Impl {
   std::size_t n_broken = 0;
 
   std::vector<Load> loads;
+
+  struct Source {
+    SourceSpec spec;
+    std::vector<LocalIndex> members;  ///< solid indices
+    std::vector<Vec> g;               ///< force per unit amplitude s(t) (solid/sources.hpp)
+  };
+  std::vector<Source> sources;
 
   // Contact scratch.
   std::vector<Vec> s_x;
@@ -303,6 +311,19 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
     load.spec.direction /= norm;
     loads.push_back(std::move(load));
   }
+  // Seismic sources: the force pattern over the body's particles around the source point.
+  for (const auto& ss : spec.sources) {
+    std::vector<std::size_t> candidates;
+    for (std::size_t k = 0; k < ns; ++k)
+      if (p.bodies[p.body[static_cast<std::size_t>(pid[k])]].name == ss.body) candidates.push_back(k);
+    if (candidates.empty())
+      throw CaseError(fmt::format("{}: source '{}': body '{}' is not a solid body with particles", spec.file, ss.name,
+                                  ss.body));
+    const VectorStencil st = source_stencil(ss, x0, candidates);
+    Source src{ss, {}, st.value};
+    for (const std::size_t k : st.index) src.members.push_back(static_cast<LocalIndex>(k));
+    sources.push_back(std::move(src));
+  }
   s_x.reserve(ns);
   s_k.reserve(ns);
 }
@@ -473,7 +494,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   SolidStepReport report;
   contact_forces(report.n_contacts);
 
-  // External loads: gravity, the coupling's per-particle force, pressure pulses.
+  // External loads: gravity, the coupling's per-particle force, pressure pulses, seismic sources.
   const bool has_gravity = gravity.squaredNorm() > 0;
   for (std::size_t k = 0; k < ns; ++k) {
     if (has_gravity) force[k] += mass[k] * gravity;
@@ -483,6 +504,11 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     const Real arg = (t - load.spec.time) / load.spec.width;
     const Vec f = load.spec.peak * std::exp(-arg * arg) * std::pow(dp, dim - 1) * load.spec.direction;
     for (const auto k : load.members) force[static_cast<std::size_t>(k)] += f;
+  }
+  for (const auto& src : sources) {
+    const Real a = src.spec.amplitude * wavelet_value(src.spec.wavelet, t);
+    if (a == 0) continue;
+    for (std::size_t q = 0; q < src.members.size(); ++q) force[static_cast<std::size_t>(src.members[q])] += a * src.g[q];
   }
 
   // Symplectic Euler (eq. 39-40, 45-46); clamped particles are attached to the tank: they follow its

@@ -1,7 +1,8 @@
 // The explicit elastic solid of seed 004 §4.2/§4.4 and seed 000 §2 (rotation-aware MPS with brittle
 // fracture and contact), as a participant of the run loop: the driver asks for a stable dt and
 // advances it one sub-step at a time. External loads (e.g. from the fluid) arrive in the vector
-// field "solid_load" (force per particle [N per unit thickness]).
+// field "solid_load" (force per particle [N per unit thickness]); the case's pressure pulses
+// (solid_loads) and seismic sources (sources, solid/sources.hpp) are applied by the solver itself.
 //
 // Equations: relative displacement with the pair's mean rotation removed (seed 004 eq. 25-29, seed 000
 // eq. 7-12), volumetric strain eq. 30, stresses eq. 31-33, accelerations eq. 36-38, shear torque
