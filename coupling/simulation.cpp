@@ -1,6 +1,6 @@
 // The run loop: fluid step, solid sub-steps, state checks (non-finite or runaway velocity, solid leaving
-// the domain), frames and probes, progress line and JSON-lines run log. With both fluid and solid the
-// steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the solid's bond
+// the domain), frames, probes and receivers, progress line and JSON-lines run log. With both fluid and
+// solid the steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the solid's bond
 // damping and the load relaxation of the case's coupling map.
 #include "coupling/simulation.hpp"
 
@@ -8,6 +8,7 @@
 
 #include "fluid/fluid_solver.hpp"
 #include "io/probes.hpp"
+#include "io/receivers.hpp"
 #include "io/vtk_writer.hpp"
 #include "solid/solid_solver.hpp"
 
@@ -28,6 +29,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+int rank_of(MPI_Comm comm) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  return rank;
+}
 
 long peak_memory_kib() {
   rusage u{};
@@ -66,7 +73,8 @@ class RunLoop {
   RunLoop(const CaseSpec& spec, Scene& scene, const RunSettings& settings, MPI_Comm comm)
       : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec),
         writer_(settings.output_dir, "particles"),
-        probes_(spec, scene.particles, settings.output_dir + "/probes.csv") {
+        probes_(spec, scene.particles, settings.output_dir + "/probes.csv"),
+        receivers_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/receivers.csv" : std::string()) {
     MPI_Comm_rank(comm, &rank_);
     log_ = rank_ == 0 && !settings.quiet;
     tty_ = log_ && isatty(fileno(stdout));
@@ -94,11 +102,13 @@ class RunLoop {
   RunSummary run() {
     const auto t_start = Clock::now();
     write_output();
+    receivers_.record_if_due(t_, p_);
     Real next_output = spec_.output.interval;
     const Real eps = 1e-12 * std::max<Real>(1, spec_.time.end);
     while (t_ < spec_.time.end - eps) {
       last_good_ = p_;  // the frame written if this step fails
       step();
+      receivers_.record_if_due(t_, p_);
       report_progress(t_start, false);
       if (t_ >= next_output - eps) {
         write_output();
@@ -301,6 +311,7 @@ class RunLoop {
   const SpeedLimits limits_;
   VtkSeriesWriter writer_;
   ProbeWriter probes_;
+  ReceiverWriter receivers_;  ///< receivers.csv (rank 0), rows every step or every receivers.interval
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<SolidSolver> solid_;
   std::unique_ptr<FsiInterface> coupling_;
