@@ -131,6 +131,11 @@ struct SolidNumerics {
   /// rows, see docs/validation.md) | "particle" (each particle's initial n_i^0, seed 004) | "lattice"
   /// (one n0, seed 000). Pair terms use the mean of 1/n_i and 1/n_j so forces stay equal and opposite.
   std::string normalisation = "mean";
+  /// Volumetric strain tr(eps)_i of eq. 30 (the pressure term, eq. 33, 38): "n0" (eq. 30 with the n0 of
+  /// `normalisation`) | "corrected" (bond weights w0/|r0| e^T B_i e with B_i from the particle's own bonds,
+  /// so that the trace of a linear displacement field is exact where the neighbourhood is truncated, e.g.
+  /// at a free surface; the same as eq. 30 in the interior). See docs/validation.md (Lamb's problem).
+  std::string volumetric_strain = "n0";
 };
 
 /// A time-dependent pressure on a region of a solid body's particles (seed 000 §4, Hopkinson bar):

@@ -806,6 +806,7 @@ void read_solid_numerics(MapReader r, SolidNumerics& n) {
   n.contact_stiffness = r.number("contact_stiffness", n.contact_stiffness, non_negative,
                                  "a non-negative number (contact spring / nearest-neighbour bond stiffness)");
   n.normalisation = r.choice("normalisation", n.normalisation, {"particle", "lattice", "mean"});
+  n.volumetric_strain = r.choice("volumetric_strain", n.volumetric_strain, {"n0", "corrected"});
   r.finish();
 }
 

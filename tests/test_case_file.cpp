@@ -147,6 +147,7 @@ TEST(CaseFile, ValidCaseGivesTheExpectedValues) {
   EXPECT_DOUBLE_EQ(c.solid.dt_factor, 0.3);
   EXPECT_DOUBLE_EQ(c.solid.contact_stiffness, 0.5);
   EXPECT_EQ(c.solid.normalisation, "lattice");
+  EXPECT_EQ(c.solid.volumetric_strain, "corrected");
   ASSERT_EQ(c.solid_loads.size(), 1u);
   EXPECT_EQ(c.solid_loads[0].body, "plate");
   EXPECT_DOUBLE_EQ(c.solid_loads[0].region.lo[1], 0.1);
@@ -215,6 +216,7 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_TRUE(c.bodies[0].velocity.isZero());
   EXPECT_FALSE(c.solid.plane_stress);
   EXPECT_EQ(c.solid.normalisation, "mean");
+  EXPECT_EQ(c.solid.volumetric_strain, "n0");
   EXPECT_DOUBLE_EQ(c.solid.dt_factor, SolidNumerics{}.dt_factor);
   EXPECT_TRUE(c.solid_loads.empty());
   EXPECT_TRUE(c.sources.empty());
@@ -476,6 +478,8 @@ TEST(CaseFileErrors, SolidLoads) {
   EXPECT_THAT(error_of(valid_with("width: 0.005", "width: 0")), HasSubstr("solid_loads[0].width = 0: expected a positive number"));
   EXPECT_THAT(error_of(valid_with("normalisation: lattice", "normalisation: grid")),
               HasSubstr("solid.normalisation = grid: expected one of: particle, lattice, mean"));
+  EXPECT_THAT(error_of(valid_with("volumetric_strain: corrected", "volumetric_strain: exact")),
+              HasSubstr("solid.volumetric_strain = exact: expected one of: n0, corrected"));
 }
 
 TEST(CaseFile, WaveletTableIsReadRelativeToTheCaseFile) {
