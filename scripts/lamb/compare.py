@@ -219,10 +219,10 @@ def plot(path, case, medium, srcs, traces, label):
             ax.plot(t * 1e3, y0 + scale * num, "r--", lw=0.9)
             ax.plot(t * 1e3, y0 + 5 * scale * (num - ana), "b:", lw=0.9)
             ax.plot([t[-1] * 1e3], [y0], "ko", ms=3)
-            ax.text(t_max * 1e3 * 1.01, y0, f"{100 * mis:.2f} %", va="center", fontsize=8)
+            ax.text(t_max * 1e3 * 1.025, y0, f"{100 * mis:.2f} %", va="center", fontsize=8)
         ax.set_title(f"{title}; peak {peak:.3g} m")
         ax.set_xlabel("t [ms]")
-        ax.set_xlim(0, t_max * 1e3 * 1.13)
+        ax.set_xlim(0, t_max * 1e3 * 1.15)
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("offset [m]")
     handles = [plt.Line2D([], [], color="k", ls="-", label="analytic"),

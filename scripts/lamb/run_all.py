@@ -9,7 +9,10 @@ Cagniard-de Hoop at the surface, wavenumber integration at depth). A 400 Hz run 
 window end (t0 + 38 m / c_R + 1.5 / f0), shorter than the 300 Hz run of the case file.
 
   /usr/bin/python3 scripts/lamb/run_all.py [--mpsfsi build/mpsfsi] [--out out/lamb]
-      [--only a300_19,b300_19] [--skip-existing] [--plots docs/img] [--markdown table.md]
+      [--only a300_19,b300_19] [--skip-existing] [--no-run] [--set KEY=VALUE ...] [--markdown table.md]
+
+The runs use the case files as they are (solid.volumetric_strain: corrected); docs/validation.md's
+`n0` rows come from `--set solid.volumetric_strain=n0 --out out/lamb_n0`.
 
 Writes OUT/<run>/ (the run, receivers.csv, misfit_surface.csv, misfit_depth1.csv, PNGs) and prints
 the tables (markdown) with particles, steps, wall and CPU time of each run (from OUT/<run>/run.jsonl
@@ -53,6 +56,8 @@ def run_one(args, name, model, f0, re):
     cmd = [args.mpsfsi, "run", os.path.join(ROOT, case), "--quiet", "--overwrite", "--output", out,
            "--end-time", f"{end:g}", "--set", f"sources.blast.wavelet.frequency={f0}", "--set", f"solid.re={re}",
            "--set", f"receivers.points=[{surface}, {buried}]"]
+    for extra in args.set or []:
+        cmd += ["--set", extra]
     done = os.path.join(out, "run.jsonl")
     if args.skip_existing and os.path.isfile(done) and '"summary"' in open(done, encoding="utf-8").read():
         print(f"{name}: exists, skipped", flush=True)
@@ -111,6 +116,7 @@ def main(argv=None):
     ap.add_argument("--skip-existing", action="store_true", help="do not rerun a finished run")
     ap.add_argument("--no-run", action="store_true", help="only compare existing runs")
     ap.add_argument("--markdown", help="also write the tables to this file")
+    ap.add_argument("--set", action="append", help="an extra --set override for every run (repeatable)")
     args = ap.parse_args(argv)
     only = set(args.only.split(",")) if args.only else None
     selected = [c for c in configs() if only is None or c[0] in only]
