@@ -1,8 +1,8 @@
 // The run loop: fluid step, solid sub-steps, state checks (non-finite or runaway velocity, solid leaving
-// the domain), frames and probes, progress line and JSON-lines run log, checkpoints and restarts (the run
-// loop's own state plus each participant's save_state / load_state, in named sections). With both fluid
-// and solid the steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with the
-// solid's bond damping and the load relaxation of the case's coupling map.
+// the domain), frames, probes and receivers, progress line and JSON-lines run log, checkpoints and restarts
+// (the run loop's own state plus each participant's save_state / load_state, in named sections). With both
+// fluid and solid the steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with
+// the solid's bond damping and the load relaxation of the case's coupling map.
 #include "coupling/simulation.hpp"
 
 #include "coupling/checkpoint.hpp"
@@ -10,6 +10,7 @@
 
 #include "fluid/fluid_solver.hpp"
 #include "io/probes.hpp"
+#include "io/receivers.hpp"
 #include "io/vtk_writer.hpp"
 #include "solid/solid_solver.hpp"
 
@@ -34,6 +35,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+int rank_of(MPI_Comm comm) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  return rank;
+}
 
 long peak_memory_kib() {
   rusage u{};
@@ -73,7 +80,9 @@ class RunLoop {
       : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec),
         writer_(settings.output_dir, "particles"),
         probes_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/probes.csv" : std::string(),
-                appends("probes.csv")) {
+                appends("probes.csv")),
+        receivers_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/receivers.csv" : std::string(),
+                   appends("receivers.csv")) {
     MPI_Comm_rank(comm, &rank_);
     MPI_Comm_size(comm, &n_ranks_);
     log_ = rank_ == 0 && !settings.quiet;
@@ -105,7 +114,10 @@ class RunLoop {
     const auto t_start = Clock::now();
     t_begin_ = t_;
     step_begin_ = step_;
-    if (!settings_.restart) write_output();
+    if (!settings_.restart) {
+      write_output();
+      receivers_.record_if_due(t_, p_);
+    }
     const Real eps = 1e-12 * std::max<Real>(1, spec_.time.end);
     const Real every = settings_.checkpoint_every;
     const auto next_checkpoint_after = [&](const Real t) { return (std::floor((t + eps) / every) + 1) * every; };
@@ -114,6 +126,7 @@ class RunLoop {
     while (t_ < spec_.time.end - eps) {
       last_good_ = p_;  // the frame written if this step fails
       step();
+      receivers_.record_if_due(t_, p_);
       report_progress(t_start, false);
       if (t_ >= next_output_ - eps) {
         write_output();
@@ -334,6 +347,7 @@ class RunLoop {
     w.boolean(fluid_ != nullptr);
     w.boolean(solid_ != nullptr);
     w.boolean(coupling_ != nullptr);
+    receivers_.save_state(w);
   }
 
   /// Writes checkpoint_<t>.chk into the output folder (rank 0; every rank holds the same state).
@@ -348,6 +362,7 @@ class RunLoop {
     if (coupling_) coupling_->save_state(w);
     w.section("end");
     jsonl_.flush();
+    receivers_.flush();
     CheckpointInfo info;
     info.case_name = spec_.name;
     info.case_file = spec_.file;
@@ -361,7 +376,7 @@ class RunLoop {
     info.n_ranks = n_ranks_;
     info.next_frame = writer_.next_frame();
     info.frames = writer_.frames();
-    info.outputs = mark_outputs(settings_.output_dir, {"probes.csv", "interface.csv", "fragments.csv", "run.jsonl"});
+    info.outputs = mark_outputs(settings_.output_dir, {"probes.csv", "interface.csv", "fragments.csv", "receivers.csv", "run.jsonl"});
     const std::time_t now = std::time(nullptr);
     char date[64] = "";
     std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S %z", std::localtime(&now));
@@ -404,6 +419,7 @@ class RunLoop {
                  coupled = in.boolean("the coupling flag");
       if (fluid != (fluid_ != nullptr) || solid != (solid_ != nullptr) || coupled != (coupling_ != nullptr))
         in.fail("the checkpoint's run has other participants (fluid, solid, coupling) than this case");
+      receivers_.load_state(in);
       p_.load_state(in);
       if (fluid_) exact_ = fluid_->load_state(in);
       if (solid_) solid_->load_state(in);
@@ -448,6 +464,7 @@ class RunLoop {
   const SpeedLimits limits_;
   VtkSeriesWriter writer_;
   ProbeWriter probes_;
+  ReceiverWriter receivers_;  ///< receivers.csv (rank 0), rows every step or every receivers.interval
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<SolidSolver> solid_;
   std::unique_ptr<FsiInterface> coupling_;

@@ -136,6 +136,11 @@ struct SolidNumerics {
   /// rows, see docs/validation.md) | "particle" (each particle's initial n_i^0, seed 004) | "lattice"
   /// (one n0, seed 000). Pair terms use the mean of 1/n_i and 1/n_j so forces stay equal and opposite.
   std::string normalisation = "mean";
+  /// Volumetric strain tr(eps)_i of eq. 30 (the pressure term, eq. 33, 38): "n0" (eq. 30 with the n0 of
+  /// `normalisation`) | "corrected" (bond weights w0/|r0| e^T B_i e with B_i from the particle's own bonds,
+  /// so that the trace of a linear displacement field is exact where the neighbourhood is truncated, e.g.
+  /// at a free surface; the same as eq. 30 in the interior). See docs/validation.md (Lamb's problem).
+  std::string volumetric_strain = "n0";
 };
 
 /// A time-dependent pressure on a region of a solid body's particles (seed 000 §4, Hopkinson bar):
@@ -149,6 +154,51 @@ struct SolidLoadSpec {
   Real peak = 0;                ///< peak pressure [Pa]
   Real time = 0;                ///< time of the peak [s]
   Real width = 1;               ///< 1/e half-width of the Gaussian [s]
+};
+
+/// Time function s(t) of a source (same definitions as scripts/lamb/lamb2d.py; tau = t - delay,
+/// sigma = 1 / (2 pi f0)): gaussian_derivative -sqrt(e) (tau/sigma) exp(-tau^2 / (2 sigma^2)) (unit peak,
+/// positive lobe first, amplitude spectrum peaks at f0); ricker (1 - 2 pi^2 f0^2 tau^2) exp(-pi^2 f0^2 tau^2);
+/// gaussian exp(-tau^2 / (2 sigma^2)); table: (time, value) linearly interpolated, zero outside.
+enum class WaveletType { gaussian_derivative, ricker, gaussian, table };
+
+struct WaveletSpec {
+  WaveletType type = WaveletType::gaussian_derivative;
+  Real frequency = 0;             ///< central frequency f0 [Hz] (not for table)
+  Real delay = 0;                 ///< t0 [s] (not for table); the parser's default is 1.5 / f0
+  std::vector<Real> time, value;  ///< table: samples, strictly increasing times [s]
+  std::string file;               ///< table: the CSV it was read from (for messages)
+};
+
+/// A seismic source in a solid body (seed 000 §3): an explosive line source (isotropic line moment
+/// M(t) delta_ij, M = amplitude s(t) [N m/m]; body force -M grad(delta), discretised by
+/// core/point_stencil.hpp moment_stencil) or a line force F(t) = amplitude s(t) [N/m] along
+/// `direction` (spread by interpolation_stencil), over the body's particles within `radius`.
+enum class SourceType { explosion, force };
+
+struct SourceSpec {
+  std::string name;
+  std::string body;               ///< a solid body
+  SourceType type = SourceType::explosion;
+  Vec position = Vec::Zero();     ///< source point [m] (in the reference configuration)
+  Vec direction = Vec(0, 1);      ///< force only: unit direction
+  Real amplitude = 1;             ///< M0 [N m/m] (explosion) or F0 [N/m] (force)
+  Real radius = 0;                ///< stencil radius [m]; the parser's default is 2 dp
+  WaveletSpec wavelet;
+};
+
+/// A receiver: the displacement of the material point of a solid body that starts at `position`,
+/// interpolated from the body's particles within ReceiversSpec::radius (interpolation_stencil).
+struct ReceiverSpec {
+  std::string name;
+  std::string body;
+  Vec position = Vec::Zero();
+};
+
+struct ReceiversSpec {
+  std::optional<Real> interval;   ///< simulated time between rows of receivers.csv [s]; none: every step
+  Real radius = 0;                ///< stencil radius [m]; the parser's default is 2 dp
+  std::vector<ReceiverSpec> points;
 };
 
 struct OutputSpec {
@@ -174,7 +224,9 @@ struct CaseSpec {
   FluidNumerics fluid;
   SolidNumerics solid;
   std::vector<SolidLoadSpec> solid_loads;
+  std::vector<SourceSpec> sources;
   std::vector<ProbeSpec> probes;
+  ReceiversSpec receivers;
   OutputSpec output;
   std::string resolved_yaml;    ///< the case after every override, as YAML (saved with the results)
 

@@ -809,7 +809,22 @@ void read_solid_numerics(MapReader r, SolidNumerics& n) {
   n.contact_stiffness = r.number("contact_stiffness", n.contact_stiffness, non_negative,
                                  "a non-negative number (contact spring / nearest-neighbour bond stiffness)");
   n.normalisation = r.choice("normalisation", n.normalisation, {"particle", "lattice", "mean"});
+  n.volumetric_strain = r.choice("volumetric_strain", n.volumetric_strain, {"n0", "corrected"});
   r.finish();
+}
+
+/// The solid body named by `key` of `r` (checked: it exists and is solid).
+const BodySpec& solid_body(MapReader& r, const CaseSpec& spec, const std::string& key, const std::string& name) {
+  const auto b = std::find_if(spec.bodies.begin(), spec.bodies.end(), [&](const BodySpec& s) { return s.name == name; });
+  if (b == spec.bodies.end() || b->kind != BodyKind::solid) {
+    std::vector<std::string> solids;
+    for (const auto& s : spec.bodies)
+      if (s.kind == BodyKind::solid) solids.push_back(s.name);
+    r.source().fail(r.at(key), fmt::format("{} = {}: {}; expected a solid body (one of: {})", r.path_of(key), name,
+                                           b == spec.bodies.end() ? "unknown body" : "'" + name + "' is a fluid body",
+                                           solids.empty() ? std::string("none defined") : join(solids)));
+  }
+  return *b;
 }
 
 void read_solid_loads(MapReader& top, CaseSpec& spec) {
@@ -827,20 +842,106 @@ void read_solid_loads(MapReader& top, CaseSpec& spec) {
     l.width = r.number("width", positive, "a positive number (1/e half-width of the pulse) [s]");
     r.finish();
     if (!(l.direction.norm() > 0)) src.expected(r.at("direction"), "a non-zero direction [x, y] of the force");
-    const auto b = std::find_if(spec.bodies.begin(), spec.bodies.end(), [&](const BodySpec& s) { return s.name == l.body; });
-    if (b == spec.bodies.end() || b->kind != BodyKind::solid) {
-      std::vector<std::string> solids;
-      for (const auto& s : spec.bodies)
-        if (s.kind == BodyKind::solid) solids.push_back(s.name);
-      src.fail(r.at("body"), fmt::format("{} = {}: {}; expected a solid body (one of: {})", r.path_of("body"), l.body,
-                                         b == spec.bodies.end() ? "unknown body" : "'" + l.body + "' is a fluid body",
-                                         solids.empty() ? std::string("none defined") : join(solids)));
-    }
-    if (!overlaps(l.region, b->rect))
+    const BodySpec& b = solid_body(r, spec, "body", l.body);
+    if (!overlaps(l.region, b.rect))
       src.fail(r.at("region"), fmt::format("{} = {} does not overlap body '{}' {}: expected a region that covers part of "
                                            "the body",
-                                           r.path_of("region"), show_rect(l.region), b->name, show_rect(b->rect)));
+                                           r.path_of("region"), show_rect(l.region), b.name, show_rect(b.rect)));
     spec.solid_loads.push_back(l);
+  }
+}
+
+/// A wavelet table: CSV (or whitespace-separated) rows of time [s], value; '#' comments, empty lines
+/// and one header line before the data are skipped. At least two rows, times strictly increasing.
+void read_wavelet_table(const Source& src, const Field& f, const fs::path& path, WaveletSpec& w) {
+  std::ifstream in(path);
+  if (!in) src.fail(f, fmt::format("{} = {}: cannot read '{}'; expected a CSV file of time [s], value", f.path,
+                                   f.node.Scalar(), path.string()));
+  std::string line;
+  int line_no = 0;
+  bool header_allowed = true;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const std::string t = trim(line.substr(0, line.find('#')));
+    if (t.empty() || t == "\r") continue;
+    std::string row = t;
+    std::replace(row.begin(), row.end(), ',', ' ');
+    std::istringstream ls(row);
+    std::string a, b, extra;
+    ls >> a >> b;
+    const auto time = parse_real(a), value = parse_real(trim(b));
+    const bool more = static_cast<bool>(ls >> extra) && !trim(extra).empty();
+    if (!time || !value || more) {
+      if (header_allowed && !time) {
+        header_allowed = false;
+        continue;
+      }
+      src.fail(f, fmt::format("{} = {}: {}:{}: '{}': expected a row of two numbers: time [s], value", f.path,
+                              f.node.Scalar(), path.string(), line_no, t));
+    }
+    header_allowed = false;
+    if (!w.time.empty() && !(*time > w.time.back()))
+      src.fail(f, fmt::format("{} = {}: {}:{}: time {:g} s: expected times that increase strictly", f.path,
+                              f.node.Scalar(), path.string(), line_no, *time));
+    w.time.push_back(*time);
+    w.value.push_back(*value);
+  }
+  if (w.time.size() < 2)
+    src.fail(f, fmt::format("{} = {}: '{}' has {} row(s); expected at least two rows of time [s], value", f.path,
+                            f.node.Scalar(), path.string(), w.time.size()));
+}
+
+void read_wavelet(MapReader r, const fs::path& base_dir, WaveletSpec& w) {
+  const std::string type = r.choice("type", {"gaussian_derivative", "ricker", "gaussian", "table"});
+  if (type == "table") {
+    w.type = WaveletType::table;
+    const std::string file = r.text("file", "the path of a CSV file of time [s], value, relative to the case file");
+    const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
+    w.file = path.string();
+    read_wavelet_table(r.source(), r.at("file"), path, w);
+  } else {
+    w.type = type == "gaussian_derivative" ? WaveletType::gaussian_derivative
+             : type == "ricker"            ? WaveletType::ricker
+                                           : WaveletType::gaussian;
+    w.frequency = r.number("frequency", positive, "a positive number (central frequency f0) [Hz]");
+    w.delay = r.number("delay", 1.5 / w.frequency, non_negative,
+                       "a non-negative number (delay t0 of the wavelet's centre; default 1.5 / frequency) [s]");
+  }
+  r.finish();
+}
+
+void read_sources(MapReader& top, const fs::path& base_dir, CaseSpec& spec) {
+  const Source& src = top.source();
+  std::map<std::string, std::string> names;
+  for (const Field& item : top.list("sources", "a list of sources, each {name, body, type, position, ...}", false)) {
+    MapReader r(src, item, "a source {name, body, type: explosion | force, position, amplitude, direction, radius, wavelet}");
+    SourceSpec s;
+    s.name = unique_name(r, names, "sources");
+    s.body = r.name("body", "the name of a solid body");
+    s.type = r.choice("type", {"explosion", "force"}) == "explosion" ? SourceType::explosion : SourceType::force;
+    s.position = r.vec("position", point_form + " on the body");
+    s.amplitude = r.number("amplitude", any_number,
+                           s.type == SourceType::explosion ? "a number (line moment M0) [N m/m]"
+                                                           : "a number (line force F0) [N/m]");
+    if (s.type == SourceType::force) {
+      s.direction = r.vec("direction", "a non-zero direction [x, y] of the force");
+      if (!(s.direction.norm() > 0)) src.expected(r.at("direction"), "a non-zero direction [x, y] of the force");
+      s.direction.normalize();
+    } else if (r.has("direction")) {
+      src.fail(r.at("direction"), fmt::format("{}: expected only with type: force (an explosion pushes in every "
+                                              "direction); remove it",
+                                              r.path_of("direction")));
+    }
+    s.radius = r.number("radius", 2 * spec.dp, positive,
+                        "a positive number (radius of the particle stencil; default 2 dp) [m]");
+    read_wavelet(r.map("wavelet", "a map {type: gaussian_derivative | ricker | gaussian | table, frequency, delay, file}"),
+                 base_dir, s.wavelet);
+    r.finish();
+    const BodySpec& b = solid_body(r, spec, "body", s.body);
+    if (!b.rect.contains(s.position))
+      src.fail(r.at("position"), fmt::format("{} = {}: expected a point on body '{}' {}", r.path_of("position"),
+                                             show_vec(s.position), b.name, show_rect(b.rect)));
+    spec.sources.push_back(s);
   }
 }
 
@@ -890,6 +991,31 @@ void read_probes(MapReader& top, CaseSpec& spec) {
   }
 }
 
+void read_receivers(MapReader r, CaseSpec& spec) {
+  const Source& src = r.source();
+  ReceiversSpec& rs = spec.receivers;
+  rs.interval = r.optional_number("interval", positive,
+                                  "a positive number (simulated time between rows of receivers.csv; default every step) [s]");
+  rs.radius = r.number("radius", 2 * spec.dp, positive,
+                       "a positive number (radius of the particle stencil; default 2 dp) [m]");
+  std::map<std::string, std::string> names;
+  const bool any = !r.empty();
+  for (const Field& item : r.list("points", "a list of receivers, each {name, body, position}", any)) {
+    MapReader p(src, item, "a receiver {name, body, position}");
+    ReceiverSpec rec;
+    rec.name = unique_name(p, names, "receivers");
+    rec.body = p.name("body", "the name of a solid body");
+    rec.position = p.vec("position", point_form + " on the body");
+    p.finish();
+    const BodySpec& b = solid_body(p, spec, "body", rec.body);
+    if (!b.rect.contains(rec.position))
+      src.fail(p.at("position"), fmt::format("{} = {}: expected a point on body '{}' {}", p.path_of("position"),
+                                             show_vec(rec.position), b.name, show_rect(b.rect)));
+    rs.points.push_back(rec);
+  }
+  r.finish();
+}
+
 void read_output(MapReader r, OutputSpec& out) {
   out.interval = r.number("interval", out.interval, positive, "a positive number (simulated time between frames) [s]");
   for (const Field& f : r.list("fields", "a list of field names, e.g. [pressure, velocity]", false)) {
@@ -931,7 +1057,9 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.fluid);
   read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid);
   read_solid_loads(top, spec);
+  read_sources(top, base_dir, spec);
   read_probes(top, spec);
+  read_receivers(top.optional_map("receivers", "a map {interval, radius, points: [{name, body, position}, ...]}"), spec);
   read_output(top.optional_map("output", "a map {interval, fields}"), spec.output);
   top.finish();
   return spec;

@@ -18,6 +18,11 @@
 //   forces derive, to first order, from the energy sum_bonds K |u|^2/2 + sum_i V lambda tr_i^2/2,
 //   and momentum and angular momentum are conserved to round-off by the symplectic Euler update.
 //   "lattice" normalisation (one n0, seed 000) is available too.
+// * Volumetric strain at free surfaces (solid.volumetric_strain = corrected, docs/validation.md "Lamb's
+//   problem"): eq. 30 with a truncated neighbourhood misses the trace of the strain (at a flat surface it
+//   weighs the normal strain about half), so with a large lambda a traction-free strain is not an
+//   equilibrium of the surface rows and Rayleigh waves come out ~7 % weak. `corrected` computes tr_i with
+//   per-bond weights that make it exact for linear fields and keeps the pair form of the pressure force.
 // * cos and sin of the mean angle come from per-particle half-angle cos/sin by the addition theorem:
 //   two trig calls per particle per step instead of two per bond.
 // * Bonds are stored once per pair (j > i) in CSR with r0, 1/|r0|, w0/|r0| and the pair stiffness.
@@ -27,7 +32,9 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "io/tank_motion_spec.hpp"
+#include "solid/sources.hpp"
 
+#include <Eigen/Dense>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -100,11 +107,21 @@ struct SolidSolver::Impl {
   std::vector<LocalIndex> b_j;
   std::vector<Vec> b_r0;
   std::vector<Real> b_inv_r0, b_wr, b_k, b_w0;
+  /// Volumetric strain weights of the bond on each side: tr(eps)_i = sum_j b_vi un_ij (eq. 30): d/n0_i w0/|r0|,
+  /// or with solid.volumetric_strain = corrected w0/|r0| e0^T B_i e0 (exact trace of a linear field).
+  std::vector<Real> b_vi, b_vj;
   std::vector<std::uint8_t> b_intact;
   std::vector<Vec> b_ce;  ///< scratch: V d w0/|r0| e_ij of this step
   std::size_t n_broken = 0;
 
   std::vector<Load> loads;
+
+  struct Source {
+    SourceSpec spec;
+    std::vector<LocalIndex> members;  ///< solid indices
+    std::vector<Vec> g;               ///< force per unit amplitude s(t) (solid/sources.hpp)
+  };
+  std::vector<Source> sources;
 
   // Contact scratch.
   std::vector<Vec> s_x;
@@ -152,6 +169,11 @@ struct SolidSolver::Impl {
         f(i, j, b, Vec(x[j] - x[i]), bond_displacement(i, j, b));
       }
   }
+  /// b_vi, b_vj: d/n0_i w0/|r0| (eq. 30 with the n0 of solid.normalisation) or, `corrected`, the weights
+  /// w0/|r0| e0^T B_i e0 with B_i such that sum_j w0 (e0^T B_i e0) e0 e0^T = I: then sum_j b_vi un_ij is the
+  /// trace of any linear displacement field also where the neighbourhood is truncated (a free surface);
+  /// in the interior of the lattice B_i = d/n0 I, the same as eq. 30.
+  void set_volumetric_weights(bool corrected);
   /// Index of the bond (i, j) in the CSR, or npos.
   std::size_t find_bond(LocalIndex i, LocalIndex j) const;
   void contact_forces(std::size_t& n_contacts);
@@ -172,6 +194,9 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   const std::string& norm = spec.solid.normalisation;
   if (norm != "particle" && norm != "lattice" && norm != "mean")
     throw CaseError(fmt::format("{}: solid.normalisation = '{}': expected particle, lattice or mean", spec.file, norm));
+  if (spec.solid.volumetric_strain != "n0" && spec.solid.volumetric_strain != "corrected")
+    throw CaseError(fmt::format("{}: solid.volumetric_strain = '{}': expected n0 or corrected", spec.file,
+                                spec.solid.volumetric_strain));
 
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.kind[i] == ParticleKind::solid) {
@@ -278,6 +303,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
       b_k[b] = volume * 2 * dim * mu[i] * b_wr[b] * b_inv_r0[b] * (inv_n0[i] + inv_n0[j]);
     }
   }
+  set_volumetric_weights(spec.solid.volumetric_strain == "corrected");
   b_intact.assign(b_j.size(), 1);
   b_ce.assign(b_j.size(), Vec::Zero());
 
@@ -303,6 +329,19 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
     if (!(norm > 0)) throw CaseError(fmt::format("{}: solid load '{}': direction must be non-zero", spec.file, ls.name));
     load.spec.direction /= norm;
     loads.push_back(std::move(load));
+  }
+  // Seismic sources: the force pattern over the body's particles around the source point.
+  for (const auto& ss : spec.sources) {
+    std::vector<std::size_t> candidates;
+    for (std::size_t k = 0; k < ns; ++k)
+      if (p.bodies[p.body[static_cast<std::size_t>(pid[k])]].name == ss.body) candidates.push_back(k);
+    if (candidates.empty())
+      throw CaseError(fmt::format("{}: source '{}': body '{}' is not a solid body with particles", spec.file, ss.name,
+                                  ss.body));
+    const VectorStencil st = source_stencil(ss, x0, candidates);
+    Source src{ss, {}, st.value};
+    for (const std::size_t k : st.index) src.members.push_back(static_cast<LocalIndex>(k));
+    sources.push_back(std::move(src));
   }
   s_x.reserve(ns);
   s_k.reserve(ns);
@@ -350,6 +389,50 @@ void SolidSolver::Impl::compute_half_angles() {
     ch[k] = std::cos(0.5 * theta[k]);
     sh[k] = std::sin(0.5 * theta[k]);
   }
+}
+
+void SolidSolver::Impl::set_volumetric_weights(const bool corrected) {
+  const std::size_t nb = b_j.size();
+  b_vi.resize(nb);
+  b_vj.resize(nb);
+  for (std::size_t i = 0; i < n(); ++i)
+    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+      b_vi[b] = dim * inv_n0[i] * b_wr[b];
+      b_vj[b] = dim * inv_n0[static_cast<std::size_t>(b_j[b])] * b_wr[b];
+    }
+  if (!corrected) return;
+  // Per particle: the 3 x 3 system for (B_xx, B_yy, B_xy) of sum_j w0 (e^T B e) e e^T = I over its bonds.
+  std::vector<Eigen::Matrix3d> m(n(), Eigen::Matrix3d::Zero());
+  const auto add = [&](const std::size_t k, const Real w, const Vec& e) {
+    const Eigen::Vector3d row(e[0] * e[0], e[1] * e[1], e[0] * e[1]);  // e e^T as (xx, yy, xy)
+    const Eigen::Vector3d col(e[0] * e[0], e[1] * e[1], 2 * e[0] * e[1]);  // e^T B e = col . (Bxx, Byy, Bxy)
+    m[k] += w * row * col.transpose();
+  };
+  for (std::size_t i = 0; i < n(); ++i)
+    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+      const Vec e = b_r0[b] * b_inv_r0[b];
+      add(i, b_w0[b], e);
+      add(static_cast<std::size_t>(b_j[b]), b_w0[b], e);
+    }
+  std::vector<Eigen::Vector3d> coef(n());
+  std::vector<std::uint8_t> ok(n(), 0);
+  for (std::size_t k = 0; k < n(); ++k) {
+    const Eigen::FullPivLU<Eigen::Matrix3d> lu(m[k]);
+    // Too few bond directions (a particle with bonds along one line): keep eq. 30.
+    if (lu.rank() < 3 || !(std::abs(lu.determinant()) > 1e-9 * std::pow(m[k].norm(), 3))) continue;
+    coef[k] = lu.solve(Eigen::Vector3d(1, 1, 0));
+    ok[k] = 1;
+  }
+  const auto weight_of = [&](const std::size_t k, const std::size_t b, const Real fallback) {
+    if (!ok[k]) return fallback;
+    const Vec e = b_r0[b] * b_inv_r0[b];
+    return b_wr[b] * (coef[k][0] * e[0] * e[0] + coef[k][1] * e[1] * e[1] + 2 * coef[k][2] * e[0] * e[1]);
+  };
+  for (std::size_t i = 0; i < n(); ++i)
+    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+      b_vi[b] = weight_of(i, b, b_vi[b]);
+      b_vj[b] = weight_of(static_cast<std::size_t>(b_j[b]), b, b_vj[b]);
+    }
 }
 
 std::size_t SolidSolver::Impl::find_bond(const LocalIndex a, const LocalIndex b) const {
@@ -437,9 +520,8 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
         if (n_now[j] < n_max - n_c) surface[j] = 1;
         continue;
       }
-      const Real wr = b_wr[b];
-      tri += wr * un;
-      tr[j] += wr * un;
+      tri += b_vi[b] * un;
+      tr[j] += b_vj[b] * un;
       Vec fe = b_k[b] * u;  // sigma_ij + tau_ij term, force on i
       // Kelvin-Voigt bond damping: eta times the bond's normal stretch rate, same stiffness; rigid
       // translation and rotation give no normal stretch rate and are not damped.
@@ -449,15 +531,19 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
       const Real tq = 0.5 * cross(r, fe);  // -1/2 M_ij, M_ij = -r_ij x F_ij (eq. 42-43), same for j
       ti += tq;
       torque[j] += tq;
-      b_ce[b] = (vd * wr * inv_r) * r;
+      b_ce[b] = (vd * b_wr[b] * inv_r) * r;
     }
     force[i] += fi;
     torque[i] += ti;
     tr[i] += tri;
   }
-  // Pressure p_i = -lambda tr(eps)_i (eq. 30, 33).
-  for (std::size_t i = 0; i < ns; ++i) pn[i] = -lambda[i] * dim * inv_n0[i] * tr[i] * inv_n0[i];
-  // Pass 2: pressure term (eq. 38) in the pair form -V d w0/|r0| (p_i/n0_i + p_j/n0_j) e_ij.
+  // Pressure p_i = -lambda tr(eps)_i (eq. 30, 33); pn holds p_i / n0_i.
+  for (std::size_t i = 0; i < ns; ++i) pn[i] = -lambda[i] * tr[i] * inv_n0[i];
+  // Pass 2: pressure term (eq. 38) in the pair form -V d w0/|r0| (p_i/n0_i + p_j/n0_j) e_ij. With the eq. 30
+  // weights this is the gradient of sum_i V lambda tr_i^2 / 2. With corrected weights (exact trace) the force
+  // keeps these weights: at a flat free surface the pressure then balances the bonds' normal force exactly
+  // when sigma_yy = 0 (a uniform traction-free strain is an equilibrium, docs/validation.md), at the price of
+  // a pressure force that is no longer exactly an energy gradient near surfaces.
   for (std::size_t i = 0; i < ns; ++i) {
     Vec fi = Vec::Zero();
     const Real pi = pn[i];
@@ -474,7 +560,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   SolidStepReport report;
   contact_forces(report.n_contacts);
 
-  // External loads: gravity, the coupling's per-particle force, pressure pulses.
+  // External loads: gravity, the coupling's per-particle force, pressure pulses, seismic sources.
   const bool has_gravity = gravity.squaredNorm() > 0;
   for (std::size_t k = 0; k < ns; ++k) {
     if (has_gravity) force[k] += mass[k] * gravity;
@@ -484,6 +570,11 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     const Real arg = (t - load.spec.time) / load.spec.width;
     const Vec f = load.spec.peak * std::exp(-arg * arg) * std::pow(dp, dim - 1) * load.spec.direction;
     for (const auto k : load.members) force[static_cast<std::size_t>(k)] += f;
+  }
+  for (const auto& src : sources) {
+    const Real a = src.spec.amplitude * wavelet_value(src.spec.wavelet, t);
+    if (a == 0) continue;
+    for (std::size_t q = 0; q < src.members.size(); ++q) force[static_cast<std::size_t>(src.members[q])] += a * src.g[q];
   }
 
   // Symplectic Euler (eq. 39-40, 45-46); clamped particles are attached to the tank: they follow its
@@ -674,12 +765,12 @@ SolidDiagnostics SolidSolver::diagnostics() const {
   std::vector<Real> tr(ns, 0);
   m.for_each_intact_bond([&](std::size_t i, std::size_t j, std::size_t b, const Vec& r, const Vec& u) {
     const Real un = u.dot(r) / r.norm();
-    tr[i] += m.b_wr[b] * un;
-    tr[j] += m.b_wr[b] * un;
+    tr[i] += m.b_vi[b] * un;
+    tr[j] += m.b_vj[b] * un;
     d.strain += 0.5 * m.b_k[b] * u.squaredNorm();
   });
   for (std::size_t k = 0; k < ns; ++k) {
-    const Real t = dim * m.inv_n0[k] * tr[k];
+    const Real t = tr[k];
     d.strain += 0.5 * m.volume * m.lambda[k] * t * t;
     d.momentum += m.mass[k] * m.v[k];
     d.angular_momentum += m.mass[k] * cross(m.x[k], m.v[k]) + m.inertia[k] * m.omega[k];
@@ -730,7 +821,7 @@ std::size_t SolidSolver::memory_bytes() const {
   const std::size_t nb = m.b_j.size();
   const std::size_t per_particle = sizeof(LocalIndex) + 4 * sizeof(Vec) + 14 * sizeof(Real) + 2 + sizeof(int) * 2 +
                                    sizeof(Vec) + sizeof(LocalIndex);  // + contact scratch
-  const std::size_t per_bond = sizeof(LocalIndex) + 2 * sizeof(Vec) + 4 * sizeof(Real) + 1;
+  const std::size_t per_bond = sizeof(LocalIndex) + 2 * sizeof(Vec) + 6 * sizeof(Real) + 1;
   return ns * per_particle + nb * per_bond + (ns + 1) * sizeof(std::size_t) + m.s_nl.memory_bytes();
 }
 

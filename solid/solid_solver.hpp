@@ -1,10 +1,12 @@
 // The explicit elastic solid of seed 004 §4.2/§4.4 and seed 000 §2 (rotation-aware MPS with brittle
 // fracture and contact), as a participant of the run loop: the driver asks for a stable dt and
 // advances it one sub-step at a time. External loads (e.g. from the fluid) arrive in the vector
-// field "solid_load" (force per particle [N per unit thickness]).
+// field "solid_load" (force per particle [N per unit thickness]); the case's pressure pulses
+// (solid_loads) and seismic sources (sources, solid/sources.hpp) are applied by the solver itself.
 //
 // Equations: relative displacement with the pair's mean rotation removed (seed 004 eq. 25-29, seed 000
-// eq. 7-12), volumetric strain eq. 30, stresses eq. 31-33, accelerations eq. 36-38, shear torque
+// eq. 7-12), volumetric strain eq. 30 (optionally with weights that are exact at free surfaces,
+// solid.volumetric_strain), stresses eq. 31-33, accelerations eq. 36-38, shear torque
 // eq. 41-44, symplectic Euler eq. 39-40 and 45-46, brittle fracture eq. 47, surface particles eq. 48,
 // contact of unbonded surface particles §4.4. Lame constants from E and nu by eq. 4 (plane strain) or
 // the plane-stress reduction, or from the wave speeds vp, vs (seed 000 §4).

@@ -147,12 +147,35 @@ TEST(CaseFile, ValidCaseGivesTheExpectedValues) {
   EXPECT_DOUBLE_EQ(c.solid.dt_factor, 0.3);
   EXPECT_DOUBLE_EQ(c.solid.contact_stiffness, 0.5);
   EXPECT_EQ(c.solid.normalisation, "lattice");
+  EXPECT_EQ(c.solid.volumetric_strain, "corrected");
   ASSERT_EQ(c.solid_loads.size(), 1u);
   EXPECT_EQ(c.solid_loads[0].body, "plate");
   EXPECT_DOUBLE_EQ(c.solid_loads[0].region.lo[1], 0.1);
   EXPECT_DOUBLE_EQ(c.solid_loads[0].peak, 1000);
   EXPECT_DOUBLE_EQ(c.solid_loads[0].width, 0.005);
   EXPECT_FALSE(c.solid_materials[0].vp);
+  ASSERT_EQ(c.sources.size(), 2u);
+  EXPECT_EQ(c.sources[0].name, "tap");
+  EXPECT_EQ(c.sources[0].type, SourceType::force);
+  EXPECT_DOUBLE_EQ(c.sources[0].direction[0], 0.6);  // normalised
+  EXPECT_DOUBLE_EQ(c.sources[0].direction[1], 0.8);
+  EXPECT_DOUBLE_EQ(c.sources[0].amplitude, 10);
+  EXPECT_DOUBLE_EQ(c.sources[0].radius, 0.01);
+  EXPECT_EQ(c.sources[0].wavelet.type, WaveletType::ricker);
+  EXPECT_DOUBLE_EQ(c.sources[0].wavelet.frequency, 50);
+  EXPECT_DOUBLE_EQ(c.sources[0].wavelet.delay, 0.03);
+  EXPECT_EQ(c.sources[1].type, SourceType::explosion);
+  EXPECT_DOUBLE_EQ(c.sources[1].position[1], 0.1);
+  EXPECT_DOUBLE_EQ(c.sources[1].radius, 2 * 0.004);          // default 2 dp
+  EXPECT_DOUBLE_EQ(c.sources[1].wavelet.delay, 1.5 / 100);   // default 1.5 / f0
+  EXPECT_EQ(c.sources[1].wavelet.type, WaveletType::gaussian_derivative);
+  ASSERT_TRUE(c.receivers.interval);
+  EXPECT_DOUBLE_EQ(*c.receivers.interval, 1e-3);
+  EXPECT_DOUBLE_EQ(c.receivers.radius, 0.01);
+  ASSERT_EQ(c.receivers.points.size(), 2u);
+  EXPECT_EQ(c.receivers.points[1].name, "top");
+  EXPECT_EQ(c.receivers.points[1].body, "plate");
+  EXPECT_DOUBLE_EQ(c.receivers.points[1].position[1], 0.2);
 
   ASSERT_EQ(c.probes.size(), 4u);
   EXPECT_EQ(c.probes[1].type, ProbeType::displacement);
@@ -194,8 +217,12 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_TRUE(c.bodies[0].velocity.isZero());
   EXPECT_FALSE(c.solid.plane_stress);
   EXPECT_EQ(c.solid.normalisation, "mean");
+  EXPECT_EQ(c.solid.volumetric_strain, "n0");
   EXPECT_DOUBLE_EQ(c.solid.dt_factor, SolidNumerics{}.dt_factor);
   EXPECT_TRUE(c.solid_loads.empty());
+  EXPECT_TRUE(c.sources.empty());
+  EXPECT_TRUE(c.receivers.points.empty());
+  EXPECT_FALSE(c.receivers.interval);
 }
 
 TEST(CaseFile, SolidFromWaveSpeeds) {
@@ -254,7 +281,7 @@ TEST(CaseFileErrors, UnknownKeyAtTopLevel) {
   const std::string msg = error_of(text);
   EXPECT_THAT(msg, StartsWith(at_line(text, "colour:")));
   EXPECT_THAT(msg, HasSubstr("unknown key 'colour' in (top level); expected one of: name, description, source, dp"));
-  EXPECT_THAT(msg, HasSubstr("probes, output"));
+  EXPECT_THAT(msg, HasSubstr("probes, receivers, output"));
 }
 
 TEST(CaseFileErrors, TypoOfARequiredKey) {
@@ -454,6 +481,100 @@ TEST(CaseFileErrors, SolidLoads) {
   EXPECT_THAT(error_of(valid_with("width: 0.005", "width: 0")), HasSubstr("solid_loads[0].width = 0: expected a positive number"));
   EXPECT_THAT(error_of(valid_with("normalisation: lattice", "normalisation: grid")),
               HasSubstr("solid.normalisation = grid: expected one of: particle, lattice, mean"));
+  EXPECT_THAT(error_of(valid_with("volumetric_strain: corrected", "volumetric_strain: exact")),
+              HasSubstr("solid.volumetric_strain = exact: expected one of: n0, corrected"));
+}
+
+TEST(CaseFile, WaveletTableIsReadRelativeToTheCaseFile) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "mpsfsi_test_case_file_wavelet";
+  fs::create_directories(dir);
+  const std::string wavelet = "wavelet: {type: ricker, frequency: 50, delay: 0.03}";
+  const std::string text = valid_with(wavelet, "wavelet: {type: table, file: stf.csv}");
+  std::ofstream(dir / "case.yaml") << text;
+  const auto table_error = [&](const std::string& csv) {
+    std::ofstream(dir / "stf.csv") << csv;
+    try {
+      load_case((dir / "case.yaml").string());
+    } catch (const CaseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  std::ofstream(dir / "stf.csv") << "# a source time function\ntime,value\n0, 0\n0.001 1\n\n0.002,0.5\n";
+  const CaseSpec c = load_case((dir / "case.yaml").string());
+  const WaveletSpec& w = c.sources[0].wavelet;
+  EXPECT_EQ(w.type, WaveletType::table);
+  EXPECT_EQ(w.time, (std::vector<Real>{0, 0.001, 0.002}));
+  EXPECT_EQ(w.value, (std::vector<Real>{0, 1, 0.5}));
+  EXPECT_TRUE(fs::equivalent(w.file, dir / "stf.csv"));
+
+  EXPECT_THAT(table_error("0,0\n0.001,1\n0.001,2\n"),
+              HasSubstr("sources[0].wavelet.file = stf.csv: " + (dir / "stf.csv").string() +
+                        ":3: time 0.001 s: expected times that increase strictly"));
+  EXPECT_THAT(table_error("0,0\n0.001,x\n"), HasSubstr(":2: '0.001,x': expected a row of two numbers: time [s], value"));
+  EXPECT_THAT(table_error("0,0,1\n"), HasSubstr(":1: '0,0,1': expected a row of two numbers"));
+  EXPECT_THAT(table_error("0,0\n"), HasSubstr("has 1 row(s); expected at least two rows"));
+  fs::remove_all(dir);
+  // parse_case resolves relative to the current directory, where there is no stf.csv.
+  EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "wavelet: {type: table") +
+                                        " sources[0].wavelet.file = stf.csv: cannot read './stf.csv'; expected a CSV file"));
+}
+
+TEST(CaseFileErrors, Sources) {
+  const std::string src = "position: [0.406, 0.15]";
+  EXPECT_THAT(error_of(valid_with("name: tap\n    body: plate", "name: tap\n    body: column")),
+              HasSubstr("sources[0].body = column: 'column' is a fluid body; expected a solid body (one of: plate)"));
+  EXPECT_THAT(error_of(valid_with("type: force\n", "type: push\n")),
+              HasSubstr("sources[0].type = push: expected one of: explosion, force"));
+  EXPECT_THAT(error_of(valid_with(src, "position: [0.3, 0.15]")),
+              HasSubstr("sources[0].position = [0.3, 0.15]: expected a point on body 'plate' {min: [0.4, 0.02], max: "
+                        "[0.412, 0.2]}"));
+  EXPECT_THAT(error_of(valid_with("direction: [3, 4]", "direction: [0, 0]")),
+              HasSubstr("sources[0].direction = [0, 0]: expected a non-zero direction"));
+  EXPECT_THAT(error_of(valid_with("    direction: [3, 4]\n", "")), HasSubstr("missing key 'direction' in sources[0]"));
+  EXPECT_THAT(error_of(valid_with("amplitude: 2.5,", "amplitude: 2.5, direction: [1, 0],")),
+              HasSubstr("sources[1].direction: expected only with type: force"));
+  EXPECT_THAT(error_of(valid_with("radius: 0.01\n    wavelet", "radius: 0\n    wavelet")),
+              HasSubstr("sources[0].radius = 0: expected a positive number (radius of the particle stencil"));
+  EXPECT_THAT(error_of(valid_with("type: ricker", "type: sinc")),
+              HasSubstr("sources[0].wavelet.type = sinc: expected one of: gaussian_derivative, ricker, gaussian, table"));
+  EXPECT_THAT(error_of(valid_with("frequency: 50,", "frequency: -50,")),
+              HasSubstr("sources[0].wavelet.frequency = -50: expected a positive number (central frequency f0) [Hz]"));
+  EXPECT_THAT(error_of(valid_with("frequency: 50,", "")), HasSubstr("missing key 'frequency' in sources[0].wavelet"));
+  EXPECT_THAT(error_of(valid_with("delay: 0.03", "delay: -1")),
+              HasSubstr("sources[0].wavelet.delay = -1: expected a non-negative number"));
+  EXPECT_THAT(error_of(valid_with("delay: 0.03", "delay: 0.03, width: 1")),
+              HasSubstr("unknown key 'width' in sources[0].wavelet"));
+  EXPECT_THAT(error_of(valid_with("    wavelet: {type: ricker, frequency: 50, delay: 0.03}\n", "")),
+              HasSubstr("missing key 'wavelet' in sources[0]"));
+  EXPECT_THAT(error_of(valid_with("name: blast", "name: tap")),
+              HasSubstr("sources[1].name = tap: duplicate name (also sources[0].name); expected a name unique among sources"));
+}
+
+TEST(CaseFileErrors, Receivers) {
+  EXPECT_THAT(error_of(valid_with("{name: top, body: plate, position: [0.406, 0.2]}",
+                                  "{name: top, body: plate, position: [0.406, 0.21]}")),
+              HasSubstr("receivers.points[1].position = [0.406, 0.21]: expected a point on body 'plate'"));
+  EXPECT_THAT(error_of(valid_with("{name: top, body: plate", "{name: top, body: tank")),
+              HasSubstr("receivers.points[1].body = tank: unknown body; expected a solid body (one of: plate)"));
+  EXPECT_THAT(error_of(valid_with("{name: top, body: plate", "{name: mid, body: plate")),
+              HasSubstr("receivers.points[1].name = mid: duplicate name (also receivers.points[0].name)"));
+  EXPECT_THAT(error_of(valid_with("  interval: 1.0e-3\n", "  interval: 0\n")),
+              HasSubstr("receivers.interval = 0: expected a positive number (simulated time between rows"));
+  EXPECT_THAT(error_of(valid_with("  radius: 0.01\n  points:", "  radius: 0.01\n  spacing: 1\n  points:")),
+              HasSubstr("unknown key 'spacing' in receivers"));
+  const std::string points = "  points:\n    - {name: mid, body: plate, position: [0.406, 0.1]}\n"
+                             "    - {name: top, body: plate, position: [0.406, 0.2]}\n";
+  EXPECT_THAT(error_of(valid_with(points, "")), HasSubstr("missing key 'points' in receivers"));
+  EXPECT_THAT(error_of(valid_with(points, "  points: []\n")),
+              HasSubstr("receivers.points = []: expected a list of receivers, each {name, body, position}"));
+  // Receivers can be dropped or replaced with --set.
+  EXPECT_TRUE(parse_case(valid_text(), file_name, {"receivers=~"}).receivers.points.empty());
+  const CaseSpec c =
+      parse_case(valid_text(), file_name, {"receivers.points=[{name: a, body: plate, position: [0.41, 0.05]}]"});
+  ASSERT_EQ(c.receivers.points.size(), 1u);
+  EXPECT_DOUBLE_EQ(c.receivers.points[0].position[0], 0.41);
 }
 
 TEST(CaseFileErrors, DuplicateNames) {

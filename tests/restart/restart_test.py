@@ -5,7 +5,7 @@ bitwise: a run to END without checkpoints (A) and the same run with --checkpoint
   write identical outputs (checkpoints do not perturb the run). Then, for the first and the last checkpoint
   before END, B is restarted in its own folder from that checkpoint (`mpsfsi run --restart FILE`, the
   case taken from the checkpoint): the folder must again equal A's exactly, i.e. every frame's point
-  arrays bit for bit, the .pvd, probes.csv, interface.csv and fragments.csv byte for byte. Finally a
+  arrays bit for bit, the .pvd, probes.csv, interface.csv, fragments.csv and receivers.csv byte for byte. Finally a
   restart into a new folder (case file given) must write the frames after the checkpoint bit for bit and
   the CSV rows after the checkpoint time byte for byte.
 cli: a checkpoint of another case, a truncated, a damaged and a non-checkpoint file, one of another
@@ -33,7 +33,7 @@ import numpy as np
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
-CSV_FILES = ["probes.csv", "interface.csv", "fragments.csv"]
+CSV_FILES = ["probes.csv", "interface.csv", "fragments.csv", "receivers.csv"]
 
 
 def fail(msg):

@@ -1,0 +1,113 @@
+// Receiver stencils and receivers.csv (io/receivers.hpp).
+#include "io/receivers.hpp"
+
+#include "core/point_stencil.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+#include <unordered_map>
+
+namespace mpsfsi {
+
+ReceiverWriter::ReceiverWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path,
+                               const bool append)
+    : interval_(spec.receivers.interval) {
+  for (const auto& rs : spec.receivers.points) {
+    std::vector<std::size_t> candidates;
+    for (std::size_t i = 0; i < particles.size(); ++i)
+      if (particles.kind[i] == ParticleKind::solid && particles.bodies[particles.body[i]].name == rs.body)
+        candidates.push_back(i);
+    if (candidates.empty())
+      throw CaseError(fmt::format("{}: receiver '{}': body '{}' is not a solid body with particles", spec.file, rs.name,
+                                  rs.body));
+    PointStencil st;
+    try {
+      st = interpolation_stencil(particles.position, candidates, rs.position, spec.receivers.radius);
+    } catch (const std::invalid_argument& e) {
+      throw CaseError(fmt::format("{}: receiver '{}' at ({:g}, {:g}) on body '{}': {}", spec.file, rs.name,
+                                  rs.position[0], rs.position[1], rs.body, e.what()));
+    }
+    Receiver r;
+    for (std::size_t q = 0; q < st.index.size(); ++q) {
+      const std::size_t i = st.index[q];
+      r.id.push_back(particles.global_id[i]);
+      r.at.push_back(static_cast<LocalIndex>(i));
+      r.x0.push_back(particles.position[i]);
+      r.phi.push_back(st.weight[q]);
+    }
+    receivers_.push_back(std::move(r));
+    columns_.push_back(rs.name + "_ux");
+    columns_.push_back(rs.name + "_uy");
+  }
+  if (receivers_.empty() || path.empty()) return;
+  out_.open(path, append ? std::ios::app : std::ios::trunc);
+  if (!out_) throw std::runtime_error("cannot write receiver file " + path);
+  if (append) return;
+  out_ << "time";
+  for (const auto& c : columns_) out_ << "," << c;
+  out_ << "\n";
+}
+
+void ReceiverWriter::save_state(BinaryWriter& w) const {
+  w.section("receivers");
+  w.u64(receivers_.size());
+  w.f64(next_);
+  w.boolean(started_);
+  w.u64(rows_);
+}
+
+void ReceiverWriter::load_state(BinaryReader& r) {
+  r.expect_section("receivers");
+  if (r.u64("the receiver count") != receivers_.size()) r.fail("the checkpoint's case has another number of receivers");
+  next_ = r.f64("the next receiver row time");
+  started_ = r.boolean("the receivers' started flag");
+  rows_ = r.u64("the receiver rows");
+}
+
+void ReceiverWriter::resolve(const ParticleSet& p) const {
+  bool moved = false;
+  for (const auto& r : receivers_)
+    for (std::size_t q = 0; q < r.id.size() && !moved; ++q) {
+      const auto i = static_cast<std::size_t>(r.at[q]);
+      moved = i >= p.size() || p.global_id[i] != r.id[q];
+    }
+  if (!moved) return;
+  std::unordered_map<GlobalId, LocalIndex> index_of;
+  index_of.reserve(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) index_of.emplace(p.global_id[i], static_cast<LocalIndex>(i));
+  for (const auto& r : receivers_)
+    for (std::size_t q = 0; q < r.id.size(); ++q) {
+      const auto it = index_of.find(r.id[q]);
+      if (it == index_of.end()) throw std::logic_error("ReceiverWriter: a receiver particle disappeared");
+      r.at[q] = it->second;
+    }
+}
+
+std::vector<Vec> ReceiverWriter::evaluate(const ParticleSet& p) const {
+  resolve(p);
+  std::vector<Vec> u;
+  u.reserve(receivers_.size());
+  for (const auto& r : receivers_) {
+    Vec s = Vec::Zero();
+    for (std::size_t q = 0; q < r.id.size(); ++q) s += r.phi[q] * (p.position[static_cast<std::size_t>(r.at[q])] - r.x0[q]);
+    u.push_back(s);
+  }
+  return u;
+}
+
+void ReceiverWriter::record_if_due(const Real t, const ParticleSet& particles) {
+  if (receivers_.empty() || !out_.is_open()) return;
+  if (started_ && interval_ && t < next_ - 1e-9 * *interval_) return;
+  if (interval_) {
+    next_ = started_ ? next_ + *interval_ : t + *interval_;
+    while (next_ <= t + 1e-9 * *interval_) next_ += *interval_;
+  }
+  started_ = true;
+  out_ << fmt::format("{:.9g}", t);
+  for (const Vec& u : evaluate(particles)) out_ << fmt::format(",{:.9g},{:.9g}", u[0], u[1]);
+  out_ << "\n";
+  if (++rows_ % 256 == 0) out_.flush();
+}
+
+}  // namespace mpsfsi
