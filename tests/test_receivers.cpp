@@ -4,6 +4,7 @@
 // a reordered particle set is followed; a receiver without enough particles is a CaseError naming it.
 #include "io/receivers.hpp"
 #include "io/scene.hpp"
+#include "support/spec_builders.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,20 +18,11 @@ namespace mpsfsi {
 namespace {
 
 CaseSpec block_case() {
-  CaseSpec spec;
-  spec.file = "test";
-  spec.name = "test";
-  spec.dp = 0.1;
-  spec.domain = {Vec(-10, -10), Vec(10, 10)};
+  CaseSpec spec = test::base_case(0.1, 10);
   SolidMaterial m;
   m.name = "rock";
   spec.solid_materials.push_back(m);
-  BodySpec b;
-  b.name = "ground";
-  b.kind = BodyKind::solid;
-  b.material = "rock";
-  b.rect = {Vec(-1, -1), Vec(1, 0)};
-  spec.bodies.push_back(b);
+  spec.bodies.push_back(test::solid_body("ground", "rock", Vec(-1, -1), Vec(1, 0)));
   spec.receivers.radius = 0.2;
   const std::vector<std::pair<std::string, Vec>> points = {
       {"inside", Vec(0.05, -0.45)}, {"between", Vec(0.3, -0.5)}, {"surface", Vec(0.42, 0)}, {"corner", Vec(-1, 0)}};

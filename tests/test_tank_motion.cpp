@@ -5,6 +5,7 @@
 #include "io/probes.hpp"
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
+#include "support/spec_builders.hpp"
 
 #include <gtest/gtest.h>
 
@@ -204,23 +205,10 @@ TEST(TankMotion, RigidRotationAboutThePivot) {
 // Clamped solid particles follow the tank: position pivot + R(theta)(x0 - pivot), velocity omega x r,
 // rotation theta; the tank-frame probe on a clamped particle reads zero, the global one does not.
 TEST(TankMotion, ClampedSolidFollowsTankAndTankFrameProbeReadsZero) {
-  CaseSpec spec;
-  spec.file = "test";
-  spec.name = "test";
-  spec.dp = 0.002;
-  spec.domain = {Vec(-1, -1), Vec(1, 1)};
-  SolidMaterial rubber;
-  rubber.name = "rubber";
-  rubber.rho = 1100;
-  rubber.E = 6e6;
-  rubber.nu = 0.49;
-  spec.solid_materials.push_back(rubber);
+  CaseSpec spec = test::base_case(0.002, 1);
+  spec.solid_materials.push_back(test::material("rubber", 1100, 6e6, 0.49));
   spec.solid.plane_stress = true;
-  BodySpec plate;
-  plate.name = "plate";
-  plate.kind = BodyKind::solid;
-  plate.material = "rubber";
-  plate.rect = {Vec(0.298, -0.008), Vec(0.302, 0.06)};
+  BodySpec plate = test::solid_body("plate", "rubber", Vec(0.298, -0.008), Vec(0.302, 0.06));
   plate.clamp = Rect{Vec(0.29, -0.01), Vec(0.31, 0.0)};
   spec.bodies.push_back(plate);
   spec.tank_motion.type = TankMotionType::sine_roll;

@@ -4,6 +4,7 @@
 // Kelvin-Voigt bond damping of coupled runs keeps the first bending mode and damps particle-scale noise.
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
+#include "support/spec_builders.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,32 +18,9 @@
 namespace mpsfsi {
 namespace {
 
-SolidMaterial material(const std::string& name, Real rho, Real E, Real nu) {
-  SolidMaterial m;
-  m.name = name;
-  m.rho = rho;
-  m.E = E;
-  m.nu = nu;
-  return m;
-}
-
-BodySpec solid_body(const std::string& name, const std::string& mat, const Vec& lo, const Vec& hi) {
-  BodySpec b;
-  b.name = name;
-  b.kind = BodyKind::solid;
-  b.material = mat;
-  b.rect = {lo, hi};
-  return b;
-}
-
-CaseSpec base_case(Real dp) {
-  CaseSpec spec;
-  spec.file = "test";
-  spec.name = "test";
-  spec.dp = dp;
-  spec.domain = {Vec(-100, -100), Vec(100, 100)};
-  return spec;
-}
+using test::base_case;
+using test::material;
+using test::solid_body;
 
 // A free body with initial velocity and angular velocity: linear momentum and total angular
 // momentum (orbital + spin I omega) are conserved to round-off, the energy drifts by < 1 %.

@@ -5,6 +5,7 @@
 // a source with too few particles in range is a CaseError naming it.
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
+#include "support/spec_builders.hpp"
 #include "solid/sources.hpp"
 
 #include <gtest/gtest.h>
@@ -73,23 +74,9 @@ TEST(Sources, TableWaveletInterpolatesLinearlyAndIsZeroOutside) {
 /// A 3 x 1.5 m block (dp 0.1 m, top at y = 0) of a rock, with one source.
 struct SourceCase {
   CaseSpec spec;
-  explicit SourceCase(const SourceSpec& source) {
-    spec.file = "test";
-    spec.name = "test";
-    spec.dp = 0.1;
-    spec.domain = {Vec(-10, -10), Vec(10, 10)};
-    SolidMaterial m;
-    m.name = "rock";
-    m.rho = 2200;
-    m.vp = 2611;
-    m.vs = 1846;
-    spec.solid_materials.push_back(m);
-    BodySpec b;
-    b.name = "ground";
-    b.kind = BodyKind::solid;
-    b.material = "rock";
-    b.rect = {Vec(-1.5, -1.5), Vec(1.5, 0)};
-    spec.bodies.push_back(b);
+  explicit SourceCase(const SourceSpec& source) : spec(test::base_case(0.1, 10)) {
+    spec.solid_materials.push_back(test::wave_material("rock", 2200, 2611, 1846));
+    spec.bodies.push_back(test::solid_body("ground", "rock", Vec(-1.5, -1.5), Vec(1.5, 0)));
     spec.sources.push_back(source);
   }
 };

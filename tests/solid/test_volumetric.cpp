@@ -7,6 +7,7 @@
 // body within 1 %.
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
+#include "support/spec_builders.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,23 +19,9 @@ namespace mpsfsi {
 namespace {
 
 CaseSpec block(const std::string& volumetric, const std::string& normalisation, const Real vp, const Real vs) {
-  CaseSpec spec;
-  spec.file = "test";
-  spec.name = "test";
-  spec.dp = 0.1;
-  spec.domain = {Vec(-10, -10), Vec(10, 10)};
-  SolidMaterial m;
-  m.name = "rock";
-  m.rho = 2200;
-  m.vp = vp;
-  m.vs = vs;
-  spec.solid_materials.push_back(m);
-  BodySpec b;
-  b.name = "ground";
-  b.kind = BodyKind::solid;
-  b.material = "rock";
-  b.rect = {Vec(-2, -1.5), Vec(2, 0)};
-  spec.bodies.push_back(b);
+  CaseSpec spec = test::base_case(0.1, 10);
+  spec.solid_materials.push_back(test::wave_material("rock", 2200, vp, vs));
+  spec.bodies.push_back(test::solid_body("ground", "rock", Vec(-2, -1.5), Vec(2, 0)));
   spec.solid.re = 1.9;
   spec.solid.volumetric_strain = volumetric;
   spec.solid.normalisation = normalisation;
