@@ -11,6 +11,7 @@
 #include "core/version.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/simulation.hpp"
+#include "fluid/fluid_solver.hpp"
 
 #include <mpi.h>
 
@@ -157,6 +158,10 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
   if (rank == 0 && !opts.quiet) {
     fmt::print("mpsfsi {}: case {} ({} particles), end time {:g} s, output {}\n", code_version(), spec.name,
                scene.particles.size(), spec.time.end, out);
+    if (const auto& lw = spec.fluid.lateral_walls; lw.gap > 0 && !spec.fluid_materials.empty())
+      fmt::print("fluid: lateral-wall friction ({}, gap {:g} m{}): velocity relative to the tank decays at k = {:.4g} 1/s\n",
+                 lw.model, lw.gap, lw.model == "stokes" ? fmt::format(", {:.4g} Hz", lw.frequency) : std::string(),
+                 lateral_wall_friction_rate(lw, spec.fluid_materials.front().nu));
     if (ck) {
       fmt::print("restart from {} (t = {:.9g} s, step {}, written {}); {}\n", ck->path, ck->info.time, ck->info.step,
                  ck->info.written_at,

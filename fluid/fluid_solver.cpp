@@ -78,6 +78,7 @@ struct FluidSolver::Impl {
     nu = m.nu;
     c = m.c;
     kappa = m.kappa;
+    lateral_friction = lateral_wall_friction_rate(spec.fluid.lateral_walls, nu);
 
     PressureSolverSettings ps;
     ps.solver = spec.fluid.solver;
@@ -125,6 +126,7 @@ struct FluidSolver::Impl {
   void move_walls(const Real t) {
     if (!motion.moving()) return;
     const auto [theta, omega] = motion.at(t);
+    wall_omega = omega;
     for (std::size_t i = 0; i < p.size(); ++i) {
       if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
       const auto it = wall_reference.find(p.global_id[i]);
@@ -134,10 +136,14 @@ struct FluidSolver::Impl {
     }
   }
 
-  /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles.
+  /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles. With lateral-wall
+  /// friction k (fluid.lateral_walls), the velocity relative to the tank then decays exactly over the step:
+  /// v* = v_wall + (v* - v_wall) exp(-k dt), v_wall the rigid velocity of the tank at the particle.
   void predict(const Real dt) {
     const std::size_t n = p.size();
     const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
+    const Real decay = std::exp(-lateral_friction * dt);
+    const bool friction = lateral_friction > 0;
     for (std::size_t i = 0; i < n; ++i) {
       if (roles[i] != Role::fluid) continue;
       Vec lap = Vec::Zero();
@@ -152,6 +158,10 @@ struct FluidSolver::Impl {
         }
       }
       p.velocity[i] += dt * (nu * a * lap + gravity);
+      if (friction) {
+        const Vec v_wall = motion.moving() ? motion.velocity_at(p.position[i], wall_omega) : Vec::Zero();
+        p.velocity[i] = v_wall + decay * (p.velocity[i] - v_wall);
+      }
       p.position[i] += dt * p.velocity[i];
     }
   }
@@ -405,6 +415,8 @@ struct FluidSolver::Impl {
   TimeSpec time;
   Rect domain;
   Real rho = 1000, nu = 0, c = 20, kappa = 1;
+  Real lateral_friction = 0;  ///< k [1/s] of fluid.lateral_walls (0: off)
+  Real wall_omega = 0;        ///< the tank's angular velocity at the end of the current step
   Real tolerance = 1e-8;
   Real density_tolerance = 0;  ///< fluid.density_tolerance: absolute stop, RMS of r dt^2 / rho
   std::string preconditioner;
@@ -424,6 +436,14 @@ struct FluidSolver::Impl {
   std::vector<Real> x_all;
   std::vector<std::uint8_t> remove;
 };
+
+Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu) {
+  if (walls.gap <= 0) return 0;
+  if (walls.model == "poiseuille") return 12.0 * nu / (walls.gap * walls.gap);
+  if (walls.model == "stokes") return std::sqrt(2.0 * nu * 2.0 * 3.14159265358979323846 * walls.frequency) / walls.gap;
+  throw std::invalid_argument("fluid.lateral_walls.model: unknown model '" + walls.model +
+                              "' (expected stokes or poiseuille)");
+}
 
 FluidSolver::FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
     : impl_(std::make_unique<Impl>(spec, particles, comm, options)) {

@@ -29,6 +29,11 @@ struct FluidStepReport {
   double t_neighbours = 0, t_assembly = 0, t_setup = 0, t_solve = 0, t_rest = 0;
 };
 
+/// The decay rate k [1/s] of the velocity relative to the tank that fluid.lateral_walls gives a fluid of
+/// kinematic viscosity nu [m^2/s]: stokes sqrt(2 nu omega) / gap, poiseuille 12 nu / gap^2; 0 when off.
+/// Throws std::invalid_argument for an unknown model.
+Real lateral_wall_friction_rate(const LateralWallFriction& walls, Real nu);
+
 /// Numerical choices that are not (yet) in the case file.
 struct FluidOptions {
   Real collision_distance = 0.5;   ///< collision model: pairs closer than this x dp (mps-practice notes)

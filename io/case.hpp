@@ -108,6 +108,17 @@ struct CouplingSpec {
   Real load_relaxation = 1.0;   ///< FsiOptions::load_relaxation
 };
 
+/// Quasi-2D friction of the two lateral walls (front and back) of a narrow tank, which a 2D model does
+/// not have: the fluid velocity relative to the tank decays at the rate k (dv/dt = -k (v - v_wall)).
+/// stokes: oscillating laminar boundary layers (Stokes' second problem) on both walls, the part of the
+/// wall shear in phase with the velocity, k = sqrt(2 nu omega) / gap, omega = 2 pi frequency.
+/// poiseuille: steady laminar flow between the walls (Hele-Shaw), k = 12 nu / gap^2.
+struct LateralWallFriction {
+  Real gap = 0;                 ///< distance between the lateral walls [m]; 0: off
+  std::string model = "stokes"; ///< stokes | poiseuille
+  Real frequency = 0;           ///< stokes: oscillation frequency [Hz] (default: 1 / period of a sine_roll)
+};
+
 struct FluidNumerics {
   Real re_gradient = 2.1;       ///< effective radius for density/gradient, in units of dp
   Real re_laplacian = 4.0;      ///< effective radius for the Laplacian, in units of dp
@@ -124,6 +135,7 @@ struct FluidNumerics {
   Real density_tolerance = 1e-6;
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between
+  LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
 };
 
 struct SolidNumerics {

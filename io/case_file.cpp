@@ -779,7 +779,25 @@ void read_coupling(MapReader r, CouplingSpec& c) {
   r.finish();
 }
 
-void read_fluid_numerics(MapReader r, FluidNumerics& n) {
+void read_lateral_walls(MapReader r, const TankMotionSpec& motion, LateralWallFriction& w) {
+  if (!r.field().node.IsDefined() || r.field().node.IsNull()) return;
+  w.gap = r.number("gap", positive, "a positive number (distance between the front and back walls) [m]");
+  w.model = r.choice("model", w.model, {"stokes", "poiseuille"});
+  if (w.model == "stokes") {
+    const auto f = r.optional_number("frequency", positive, "a positive number (oscillation frequency) [Hz]");
+    if (f)
+      w.frequency = *f;
+    else if (motion.type == TankMotionType::sine_roll)
+      w.frequency = 1.0 / motion.period;
+    else
+      r.source().fail(r.field(), fmt::format("missing key 'frequency' in {}; expected: {}, a positive number [Hz] "
+                                             "(model stokes needs the oscillation frequency unless tank_motion is a "
+                                             "sine_roll)", show_path(r.field().path), r.path_of("frequency")));
+  }
+  r.finish();
+}
+
+void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidNumerics& n) {
   n.re_gradient = r.number("re_gradient", n.re_gradient, [](Real x) { return x > 1; },
                            "a number > 1 (effective radius of density and gradient, in units of dp)");
   n.re_laplacian = r.number("re_laplacian", n.re_laplacian, [](Real x) { return x > 1; },
@@ -798,6 +816,8 @@ void read_fluid_numerics(MapReader r, FluidNumerics& n) {
   n.preconditioner_rebuild_every =
       r.integer("preconditioner_rebuild_every", n.preconditioner_rebuild_every, [](const long long k) { return k >= 1; },
                 "a positive integer (full preconditioner setup every N steps)");
+  read_lateral_walls(r.optional_map("lateral_walls", "a map {gap, model: stokes | poiseuille, frequency}"), motion,
+                     n.lateral_walls);
   r.finish();
 }
 
@@ -1054,7 +1074,8 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
 
   read_tank_motion(top.optional_map("tank_motion", "a map {type: none | sine_roll | table, ...}"), base_dir, spec);
   read_coupling(top.optional_map("coupling", "a map {subcycles, solid_damping, load_relaxation}"), spec.coupling);
-  read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.fluid);
+  read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.tank_motion,
+                      spec.fluid);
   read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid);
   read_solid_loads(top, spec);
   read_sources(top, base_dir, spec);

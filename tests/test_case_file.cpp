@@ -369,6 +369,12 @@ TEST(CaseFileErrors, OutOfRangeValues) {
               HasSubstr("fluid.solver = bicgstab: expected one of: cg, gmres"));
   EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  density_tolerance: -1e-6")),
               HasSubstr("fluid.density_tolerance = -1e-6: expected a number in [0, 1)"));
+  EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 0}")),
+              HasSubstr("fluid.lateral_walls.gap = 0: expected a positive number"));
+  EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 0.04, model: turbulent}")),
+              HasSubstr("fluid.lateral_walls.model = turbulent: expected one of: stokes, poiseuille"));
+  EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 0.04, width: 1}")),
+              HasSubstr("unknown key 'width' in fluid.lateral_walls"));
   EXPECT_THAT(error_of(valid_with("open_top: true", "open_top: maybe")),
               HasSubstr("walls[0].open_top = maybe: expected true or false"));
   EXPECT_THAT(error_of(valid_with("max: [0.2, 0.4]", "max: [0.2, -0.4]")),
@@ -789,4 +795,22 @@ TEST(CaseFileFuzz, MutatedFilesParseOrThrowCaseError) {
   std::printf("fuzz: %d mutated cases accepted, %d rejected with CaseError\n", accepted, rejected);
   EXPECT_GT(accepted, 0);
   EXPECT_GT(rejected, 0);
+}
+
+// fluid.lateral_walls: the stokes frequency defaults to the sine roll's; without a sine roll it is required.
+TEST(CaseFile, LateralWallFriction) {
+  const CaseSpec off = parse_case(valid_text(), file_name);
+  EXPECT_EQ(off.fluid.lateral_walls.gap, 0.0);
+  const CaseSpec c = parse_case(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 0.039}"), file_name);
+  EXPECT_DOUBLE_EQ(c.fluid.lateral_walls.gap, 0.039);
+  EXPECT_EQ(c.fluid.lateral_walls.model, "stokes");
+  EXPECT_DOUBLE_EQ(c.fluid.lateral_walls.frequency, 1 / 1.2);  // the valid case rolls with period 1.2 s
+  const CaseSpec f = parse_case(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 0.039, frequency: 2}"),
+                                file_name);
+  EXPECT_DOUBLE_EQ(f.fluid.lateral_walls.frequency, 2.0);
+  const CaseSpec h = parse_case(minimal_case + std::string("fluid: {lateral_walls: {gap: 0.01, model: poiseuille}}\n"), file_name);
+  EXPECT_EQ(h.fluid.lateral_walls.model, "poiseuille");
+  EXPECT_THAT(error_of(minimal_case + std::string("fluid: {lateral_walls: {gap: 0.01}}\n")),
+              HasSubstr("missing key 'frequency' in fluid.lateral_walls; expected: fluid.lateral_walls.frequency, a "
+                        "positive number [Hz]"));
 }
