@@ -142,6 +142,10 @@ struct SolidNumerics {
   Real re = 2.1;                ///< effective radius of the bonds, in units of dp
   std::optional<Real> dt;       ///< solid time step for solid-only runs [s]
   bool plane_stress = false;    ///< 2D Lame constants: false = plane strain (eq. 4 as written), true = plane stress
+  /// Plane stress with the bending modulus of a plate much wider than thick, E / (1 - nu^2) in place of E
+  /// (cylindrical bending, D = E t^3 / 12 (1 - nu^2)): plane strain's bending stiffness without its in-plane
+  /// near-incompressibility, which locks the MPS solid at nu -> 0.5. Needs plane_stress and E, nu materials.
+  bool wide_plate = false;
   Real dt_factor = 0.2;         ///< stable dt = dt_factor * dp / c_p
   Real contact_stiffness = 1.0; ///< contact spring / nearest-neighbour bond stiffness (seed 004 §4.4)
   /// n0 of eq. 30 and 36-38: "mean" ((n_i^0 + n0)/2: surface rows get the stiffness of interior

@@ -821,10 +821,22 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidNumeric
   r.finish();
 }
 
-void read_solid_numerics(MapReader r, SolidNumerics& n) {
+void read_solid_numerics(MapReader r, const std::vector<SolidMaterial>& materials, SolidNumerics& n) {
   n.re = r.number("re", n.re, [](Real x) { return x > 1; }, "a number > 1 (effective radius of the bonds, in units of dp)");
   n.dt = r.optional_number("dt", positive, "a positive number (solid time step) [s]");
   n.plane_stress = r.boolean("plane_stress", n.plane_stress, "true (plane stress) or false (plane strain)");
+  n.wide_plate = r.boolean("wide_plate", n.wide_plate,
+                           "true (plane stress with the wide-plate bending modulus E / (1 - nu^2)) or false");
+  if (n.wide_plate && !n.plane_stress)
+    r.source().fail(r.at("wide_plate"), fmt::format("{} = true: expected {}: true as well (wide_plate is the "
+                                                    "plane-stress model with the bending modulus E / (1 - nu^2))",
+                                                    r.path_of("wide_plate"), r.path_of("plane_stress")));
+  if (n.wide_plate)
+    for (const auto& m : materials)
+      if (m.vp)
+        r.source().fail(r.at("wide_plate"), fmt::format("{} = true: material '{}' is given by its wave speeds; expected "
+                                                        "solid materials given by E and nu (wide_plate scales E)",
+                                                        r.path_of("wide_plate"), m.name));
   n.dt_factor = r.number("dt_factor", n.dt_factor, in_half_open(0, 1), "a number in (0, 1] (stable dt = dt_factor dp / c_p)");
   n.contact_stiffness = r.number("contact_stiffness", n.contact_stiffness, non_negative,
                                  "a non-negative number (contact spring / nearest-neighbour bond stiffness)");
@@ -1076,7 +1088,8 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   read_coupling(top.optional_map("coupling", "a map {subcycles, solid_damping, load_relaxation}"), spec.coupling);
   read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.tank_motion,
                       spec.fluid);
-  read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid);
+  read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid_materials,
+                      spec.solid);
   read_solid_loads(top, spec);
   read_sources(top, base_dir, spec);
   read_probes(top, spec);

@@ -797,6 +797,16 @@ TEST(CaseFileFuzz, MutatedFilesParseOrThrowCaseError) {
   EXPECT_GT(rejected, 0);
 }
 
+// solid.wide_plate needs plane stress and materials given by E and nu.
+TEST(CaseFile, WidePlate) {
+  EXPECT_FALSE(parse_case(valid_text(), file_name).solid.wide_plate);
+  EXPECT_THAT(error_of(minimal_case + std::string("solid: {wide_plate: true}\n")),
+              HasSubstr("solid.wide_plate = true: expected solid.plane_stress: true as well"));
+  EXPECT_THAT(error_of(minimal_case + std::string("solid: {plane_stress: true, wide_plate: maybe}\n")),
+              HasSubstr("solid.wide_plate = maybe: expected true (plane stress with the wide-plate bending modulus"));
+  EXPECT_TRUE(parse_case(minimal_case + std::string("solid: {plane_stress: true, wide_plate: true}\n"), file_name).solid.wide_plate);
+}
+
 // fluid.lateral_walls: the stokes frequency defaults to the sine roll's; without a sine roll it is required.
 TEST(CaseFile, LateralWallFriction) {
   const CaseSpec off = parse_case(valid_text(), file_name);

@@ -341,5 +341,39 @@ TEST(Solid, BondDampingKeepsTheFirstBendingModeAndDampsParticleScaleNoise) {
               damped.noise_ke_end / damped.noise_ke_start);
 }
 
+// solid.wide_plate: plane stress with E / (1 - nu^2). Every elastic force scales with E, so from the same
+// deformed state one step gives velocities exactly 1 / (1 - nu^2) times those of plain plane stress, and the
+// stable dt (dp / c_p) is sqrt(1 - nu^2) times; plane strain gives neither (different lambda / mu).
+TEST(Solid, WidePlateScalesTheModulusByOneOverOneMinusNuSquared) {
+  const Real nu = 0.49;
+  auto velocities_after_a_step = [&](const bool wide, Real& dt_stable) {
+    CaseSpec spec = base_case(0.002);
+    spec.solid_materials.push_back(material("rubber", 1100, 6e6, nu));
+    spec.bodies.push_back(solid_body("plate", "rubber", Vec(0, 0), Vec(0.06, 0.004)));
+    spec.solid.plane_stress = true;
+    spec.solid.wide_plate = wide;
+    Scene scene = build_scene(spec);
+    ParticleSet& p = scene.particles;
+    SolidSolver solid(spec, p);
+    dt_stable = solid.stable_dt();
+    for (std::size_t i = 0; i < p.size(); ++i)  // a bend and a stretch: u = (0.01 x, 0.5 x^2)
+      p.position[i] += Vec(0.01 * p.position[i][0], 0.5 * p.position[i][0] * p.position[i][0]);
+    solid.advance(0.0, 1e-6);
+    return p.velocity;
+  };
+  Real dt_plain = 0, dt_wide = 0;
+  const std::vector<Vec> v_plain = velocities_after_a_step(false, dt_plain);
+  const std::vector<Vec> v_wide = velocities_after_a_step(true, dt_wide);
+  ASSERT_EQ(v_plain.size(), v_wide.size());
+  Real v_max = 0, err = 0;
+  for (std::size_t i = 0; i < v_plain.size(); ++i) {
+    v_max = std::max(v_max, v_plain[i].norm());
+    err = std::max(err, (v_wide[i] - v_plain[i] / (1 - nu * nu)).norm());
+  }
+  EXPECT_GT(v_max, 1e-6);
+  EXPECT_LT(err, 1e-12 * v_max / (1 - nu * nu) + 1e-300);
+  EXPECT_NEAR(dt_wide / dt_plain, std::sqrt(1 - nu * nu), 1e-12);
+}
+
 }  // namespace
 }  // namespace mpsfsi
