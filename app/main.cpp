@@ -11,6 +11,8 @@
 
 #include <exception>
 #include <iostream>
+#include <sstream>
+#include <string>
 
 namespace {
 /// MPI for the whole program; finalized on every return path.
@@ -60,12 +62,18 @@ int main(int argc, char** argv) {
   add_case_options(check, check_opts, true);
   check->add_option("--output", check_opts.output, "Also write the initial particles (.vtu/.pvd) into this folder");
 
+  // Input errors are the same on every rank: only rank 0 prints them (and the help / version text).
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  std::ostringstream no_output;
+  std::ostream& out = rank == 0 ? std::cout : no_output;
+  std::ostream& err = rank == 0 ? std::cerr : no_output;
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
-    return app.exit(e);
+    return app.exit(e, out, err);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    app.exit(e, out, err);
     return 2;
   }
 
@@ -73,10 +81,11 @@ int main(int argc, char** argv) {
     if (*check) return command_check(check_opts);
     if (*run) return command_run(run_opts, command_line);
   } catch (const CaseError& e) {
-    std::cerr << "mpsfsi: error: " << e.what() << "\n";
+    err << "mpsfsi: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "mpsfsi: run failed: " << e.what() << "\n";
+    std::cerr << "mpsfsi: run failed" << (rank > 0 ? " (rank " + std::to_string(rank) + ")" : "") << ": " << e.what()
+              << "\n";
     return 1;
   }
   return 0;

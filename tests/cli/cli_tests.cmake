@@ -27,6 +27,12 @@ mpsfsi_cli_test(no_subcommand 2 "subcommand")
 mpsfsi_cli_test(help 0 "run.*check" --help)
 mpsfsi_cli_test(version 0 "mpsfsi [0-9]+\\.[0-9]+\\.[0-9]+" --version)
 
+# Under mpirun an input error is printed once (by rank 0), not by every rank.
+add_test(NAME cli_mpi_input_error_printed_once
+         COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml|--set|dp=0"
+                 -DCODE=2 "-DREGEX=dp = 0: expected a positive number" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
+set_tests_properties(cli_mpi_input_error_printed_once PROPERTIES LABELS mpi)
+
 # Failure handling (issue 7): each kind is provoked and must give its diagnosis and a non-zero exit.
 set(db ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml)
 set(run_dir ${CMAKE_CURRENT_BINARY_DIR}/cli_runs)
