@@ -112,7 +112,7 @@ HydrostaticResult run_hydrostatic() {
   Real next_report = 0.1;
   Real t_previous = 0;
   run(spec, p, end, [&](const Real t) {
-    if (t <= t_damp) {
+    if (t_previous < t_damp) {
       const Real f = std::exp(-(t - t_previous) / tau);
       for (std::size_t i = 0; i < p.size(); ++i)
         if (p.kind[i] == ParticleKind::fluid) p.velocity[i] *= f;
