@@ -164,6 +164,10 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
       fmt::print("fluid: lateral-wall friction ({}, gap {:g} m{}): velocity relative to the tank decays at k = {:.4g} 1/s\n",
                  lw.model, lw.gap, lw.model == "stokes" ? fmt::format(", {:.4g} Hz", lw.frequency) : std::string(),
                  lateral_wall_friction_rate(lw, spec.fluid_materials.front().nu));
+    if (spec.solid.wide_plate)
+      for (const auto& m : spec.solid_materials)
+        fmt::print("solid: {} as a wide plate, plane stress with E / (1 - nu^2) = {:.4g} Pa (E = {:.4g} Pa)\n", m.name,
+                   m.E / (1 - m.nu * m.nu), m.E);
     if (ck) {
       fmt::print("restart from {} (t = {:.9g} s, step {}, written {}); {}\n", ck->path, ck->info.time, ck->info.step,
                  ck->info.written_at,
