@@ -167,7 +167,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
     if (spec.solid.wide_plate)
       for (const auto& m : spec.solid_materials)
         fmt::print("solid: {} as a wide plate, plane stress with E / (1 - nu^2) = {:.4g} Pa (E = {:.4g} Pa)\n", m.name,
-                   m.E / (1 - m.nu * m.nu), m.E);
+                   spec.solid.modulus(m), m.E);
     if (ck) {
       fmt::print("restart from {} (t = {:.9g} s, step {}, written {}); {}\n", ck->path, ck->info.time, ck->info.step,
                  ck->info.written_at,

@@ -146,6 +146,9 @@ struct SolidNumerics {
   /// (cylindrical bending, D = E t^3 / 12 (1 - nu^2)): plane strain's bending stiffness without its in-plane
   /// near-incompressibility, which locks the MPS solid at nu -> 0.5. Needs plane_stress and E, nu materials.
   bool wide_plate = false;
+
+  /// The Young's modulus the 2D model uses for material m: E, or E / (1 - nu^2) with wide_plate.
+  Real modulus(const SolidMaterial& m) const { return wide_plate ? m.E / (1 - m.nu * m.nu) : m.E; }
   Real dt_factor = 0.2;         ///< stable dt = dt_factor * dp / c_p
   Real contact_stiffness = 1.0; ///< contact spring / nearest-neighbour bond stiffness (seed 004 §4.4)
   /// n0 of eq. 30 and 36-38: "mean" ((n_i^0 + n0)/2: surface rows get the stiffness of interior

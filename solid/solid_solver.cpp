@@ -60,17 +60,17 @@ struct Lame {
 /// Lame constants of the 2D model: from vp, vs when given (seed 000 §4), else eq. 4 (plane strain),
 /// optionally reduced to plane stress (lambda* = 2 lambda mu / (lambda + 2 mu)). A wide plate (plane stress
 /// only) uses E / (1 - nu^2) in place of E: the bending modulus of a plate in cylindrical bending.
-Lame lame_constants(const SolidMaterial& m, const bool plane_stress, const bool wide_plate) {
+Lame lame_constants(const SolidMaterial& m, const SolidNumerics& numerics) {
   Lame l;
   if (m.vp && m.vs) {
     l.mu = m.rho * *m.vs * *m.vs;
     l.lambda = m.rho * (*m.vp * *m.vp - 2 * *m.vs * *m.vs);
     return l;
   }
-  const Real E = wide_plate ? m.E / (1 - m.nu * m.nu) : m.E;
+  const Real E = numerics.modulus(m);
   l.mu = E / (2 * (1 + m.nu));
   l.lambda = E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu));
-  if (plane_stress) l.lambda = 2 * l.lambda * l.mu / (l.lambda + 2 * l.mu);
+  if (numerics.plane_stress) l.lambda = 2 * l.lambda * l.mu / (l.lambda + 2 * l.mu);
   return l;
 }
 
@@ -228,7 +228,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   uf_parent.resize(ns);
 
   std::vector<Lame> lame;
-  for (const auto& m : spec.solid_materials) lame.push_back(lame_constants(m, spec.solid.plane_stress, spec.solid.wide_plate));
+  for (const auto& m : spec.solid_materials) lame.push_back(lame_constants(m, spec.solid));
   Real mu_max = 0;
   for (std::size_t k = 0; k < ns; ++k) {
     const auto i = static_cast<std::size_t>(pid[k]);
