@@ -127,7 +127,18 @@ TEST(FluidFreeSurface, DoubleCheckFlagsTheTopRowOnly) {
 
 // A 2D 5-point Poisson matrix plus a shift (SPD like the PPE) solved with each choice; the true residual
 // is recomputed here from the CRS arrays.
-class PressureSolve : public ::testing::TestWithParam<std::pair<const char*, const char*>> {};
+class PressureSolve : public ::testing::TestWithParam<std::pair<const char*, const char*>> {
+ protected:
+  /// The parameter's solver and preconditioner with this relative tolerance and 2000 iterations at most.
+  PressureSolverSettings settings_with(const Real tolerance) const {
+    PressureSolverSettings settings;
+    settings.solver = GetParam().first;
+    settings.preconditioner = GetParam().second;
+    settings.tolerance = tolerance;
+    settings.max_iterations = 2000;
+    return settings;
+  }
+};
 
 namespace {
 /// Solves the shifted 5-point system below with `settings` and `absolute_tolerance`; returns the
@@ -179,11 +190,7 @@ std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSet
 }  // namespace
 
 TEST_P(PressureSolve, TrueResidualBelowTolerance) {
-  PressureSolverSettings settings;
-  settings.solver = GetParam().first;
-  settings.preconditioner = GetParam().second;
-  settings.tolerance = 1e-8;
-  settings.max_iterations = 2000;
+  PressureSolverSettings settings = settings_with(1e-8);
   const auto [res, true_residual] = solve_model_problem(settings, 0);
   EXPECT_TRUE(res.converged);
   EXPECT_GT(res.iterations, 0);
@@ -195,11 +202,7 @@ TEST_P(PressureSolve, TrueResidualBelowTolerance) {
 // The absolute stop (fluid.density_tolerance): a looser absolute bound stops earlier, with the true
 // residual below it; a tighter one than the relative tolerance changes nothing.
 TEST_P(PressureSolve, AbsoluteToleranceStopsEarlier) {
-  PressureSolverSettings settings;
-  settings.solver = GetParam().first;
-  settings.preconditioner = GetParam().second;
-  settings.tolerance = 1e-10;
-  settings.max_iterations = 2000;
+  PressureSolverSettings settings = settings_with(1e-10);
   Real b_norm = 0;
   const auto [strict, strict_residual] = solve_model_problem(settings, 0, &b_norm);
   const Real absolute = 1e-4 * b_norm;
