@@ -210,8 +210,8 @@ TEST(FluidValidation, HydrostaticPressureAndVolume) {
 // sqrt(g dp); under a damped settling (MPSFSI_HYDROSTATIC_SETTLE) the fluid never comes to rest but creeps in
 // two cells (up along the side walls), driven by a persistent force of ~1 % of g that the density-based PPE
 // cannot see. Fourth round: a closed box without a free surface is as noisy; a corrected gradient with the
-// p_min stabiliser cuts the drive 10x but not to zero; no stabiliser tried is both a potential force and
-// compatible with the free surface. Disabled so that it shows as "disabled" in ctest; run it with
+// p_min stabiliser cuts the drive 10x but not to zero; an exact projection (force and PPE matrix from
+// N = dn/dx, complementarity free surface) comes within 1.8x of the limit at 4x the steps. Disabled so that it shows as "disabled" in ctest; run it with
 // --gtest_also_run_disabled_tests.
 TEST(FluidValidation, DISABLED_HydrostaticRest) {
   const HydrostaticResult r = run_hydrostatic();
