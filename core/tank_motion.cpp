@@ -10,10 +10,6 @@
 
 namespace mpsfsi {
 
-namespace {
-constexpr Real pi = 3.14159265358979323846;
-}
-
 void read_angle_table(const std::string& path, TankMotionParams& params) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("tank_motion: cannot read " + path);

@@ -16,6 +16,9 @@ inline constexpr int dim = MPSFSI_DIM;
 static_assert(dim == 2, "mpsfsi: only the 2D build is implemented");
 
 using Real = double;
+
+/// pi (C++17 has no std::numbers).
+inline constexpr Real pi = 3.14159265358979323846;
 using Vec = Eigen::Matrix<Real, dim, 1>;
 using Mat = Eigen::Matrix<Real, dim, dim>;
 

@@ -340,12 +340,6 @@ class RunLoop {
     }
   }
 
-  static int rank_of(MPI_Comm comm) {
-    int rank = 0;
-    MPI_Comm_rank(comm, &rank);
-    return rank;
-  }
-
   bool appends(const std::string& file) const {
     return std::find(settings_.append_files.begin(), settings_.append_files.end(), file) != settings_.append_files.end();
   }

@@ -440,7 +440,7 @@ struct FluidSolver::Impl {
 Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu) {
   if (walls.gap <= 0) return 0;
   if (walls.model == "poiseuille") return 12.0 * nu / (walls.gap * walls.gap);
-  if (walls.model == "stokes") return std::sqrt(2.0 * nu * 2.0 * 3.14159265358979323846 * walls.frequency) / walls.gap;
+  if (walls.model == "stokes") return std::sqrt(2.0 * nu * 2.0 * pi * walls.frequency) / walls.gap;
   throw std::invalid_argument("fluid.lateral_walls.model: unknown model '" + walls.model +
                               "' (expected stokes or poiseuille)");
 }

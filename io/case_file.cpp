@@ -51,8 +51,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr Real pi = 3.14159265358979323846;
-
 /// Largest number of lattice cells along one side of a rectangle, and of particles in all bodies.
 constexpr Real max_cells_per_side = 1e6;
 constexpr Real max_particles = 1e9;

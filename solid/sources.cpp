@@ -9,10 +9,6 @@
 
 namespace mpsfsi {
 
-namespace {
-constexpr Real pi = 3.14159265358979323846;
-}
-
 Real wavelet_value(const WaveletSpec& w, const Real t) {
   if (w.type == WaveletType::table) {
     if (w.time.size() < 2 || t < w.time.front() || t > w.time.back()) return 0;

@@ -72,7 +72,7 @@ std::string error_of(const std::string& text, const std::vector<std::string>& ov
   return "(no error)";
 }
 
-constexpr double deg = 3.14159265358979323846 / 180;
+constexpr double deg = pi / 180;
 
 const char* const minimal_case = R"(name: minimal
 description: one fluid block

@@ -22,7 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr Real pi = 3.14159265358979323846;
 constexpr Real deg = pi / 180;
 
 TankMotion sine(const Real amplitude, const Real period, const Vec& pivot = Vec(0.3, 0)) {

@@ -16,8 +16,6 @@
 namespace mpsfsi {
 namespace {
 
-constexpr Real pi = 3.14159265358979323846;
-
 WaveletSpec wavelet(const WaveletType type, const Real f0) {
   WaveletSpec w;
   w.type = type;
