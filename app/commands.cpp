@@ -10,6 +10,7 @@
 
 #include "core/version.hpp"
 #include "coupling/checkpoint.hpp"
+#include "coupling/rank0.hpp"
 #include "coupling/simulation.hpp"
 #include "fluid/fluid_solver.hpp"
 
@@ -57,30 +58,28 @@ int command_check(const RunOptions& opts) {
 
 namespace {
 
-/// Runs `f` on rank 0 and hands its outcome to every rank: a CaseError or other exception on rank 0 is
-/// thrown on all ranks (so that no rank waits forever for one that stopped).
-template <class F>
-void on_rank0(const int rank, F&& f) {
-  int status = 0;  // 0 ok, 1 CaseError, 2 other error
-  std::string message;
-  if (rank == 0) {
-    try {
-      f();
-    } catch (const CaseError& e) {
-      status = 1;
-      message = e.what();
-    } catch (const std::exception& e) {
-      status = 2;
-      message = e.what();
-    }
+/// The output folder of a new run: created if missing; refused (CaseError) if it is not a folder, cannot be
+/// created, or holds files and `overwrite` is false.
+void prepare_output_folder(const std::string& out, const bool overwrite) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(out, ec);
+  if (fs::exists(st)) {
+    if (!fs::is_directory(st))
+      throw CaseError(fmt::format("--output {}: exists and is not a folder; expected a new or empty folder", out));
+    const bool empty = fs::is_empty(out, ec);
+    if (ec)
+      throw CaseError(fmt::format("--output {}: cannot read the folder: {}; expected a folder this user can write", out,
+                                  ec.message()));
+    if (!empty && !overwrite)
+      throw CaseError(fmt::format("--output {}: the folder exists and is not empty; choose another or pass --overwrite", out));
+    return;
   }
-  MPI_Bcast(&status, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  std::uint64_t n = message.size();
-  MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
-  message.resize(n);
-  if (n > 0) MPI_Bcast(message.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
-  if (status == 1) throw CaseError(message);
-  if (status == 2) throw std::runtime_error(message);
+  fs::create_directories(out, ec);
+  if (ec || !fs::is_directory(out, ec))
+    throw CaseError(fmt::format("--output {}: cannot create the folder: {}; expected a path where this user can make a "
+                                "folder",
+                                out, ec ? ec.message() : std::string("not a folder")));
 }
 
 /// The case of a restart: the case file if given, else the one stored in the checkpoint; either way with
@@ -143,18 +142,20 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
   settings.checkpoint_keep = opts.checkpoint_keep;
   settings.restart = ck.get();
   bool continuing = false;
-  on_rank0(rank, [&] {
+  on_rank0(MPI_COMM_WORLD, [&] {
     if (ck) {
       const RestartOutputs r = prepare_restart_outputs(out, ck->info, opts.overwrite);
       continuing = r.continuing;
       settings.append_files = r.appended;
     } else {
-      if (fs::exists(out) && !fs::is_empty(out) && !opts.overwrite)
-        throw CaseError(fmt::format("--output {}: the folder exists and is not empty; choose another or pass --overwrite", out));
-      fs::create_directories(out);
+      prepare_output_folder(out, opts.overwrite);
     }
-    std::ofstream(out + "/case.resolved.yaml") << spec.resolved_yaml << "\n";
-    std::ofstream(out + "/command.txt", continuing ? std::ios::app : std::ios::trunc) << command_line << "\n";
+    write_file_atomically(out + "/case.resolved.yaml", spec.resolved_yaml + "\n", "resolved case");
+    const std::string command_path = out + "/command.txt";
+    std::ofstream command(command_path, continuing ? std::ios::app : std::ios::trunc);
+    command << command_line << "\n";
+    command.flush();
+    check_written(command, command_path, "command line");
   });
   settings.continue_series = continuing;
   if (rank == 0 && !opts.quiet) {

@@ -1,7 +1,9 @@
 // The mpsfsi program: `mpsfsi check CASE` validates a case and prints its particle counts and memory
 // estimate; `mpsfsi run CASE` runs it. Exit codes: 0 success, 2 bad input (case file or command
-// line), 1 an internal or I/O error, 3 a run that went unstable (diagnosis printed).
+// line), 3 a run that went wrong (diagnosis printed), 4 an output file could not be written (disk full,
+// permissions; the files written before are complete), 1 an internal error.
 #include "app/commands.hpp"
+#include "core/files.hpp"
 #include "core/version.hpp"
 #include "io/case.hpp"
 
@@ -9,6 +11,8 @@
 #include <mpi.h>
 #include <fmt/format.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <sstream>
@@ -20,6 +24,20 @@ struct MpiSession {
   MpiSession(int* argc, char*** argv) { MPI_Init(argc, argv); }
   ~MpiSession() { MPI_Finalize(); }
 };
+
+/// An option value that must not be empty (`--output ''` is refused, not read as the default).
+const CLI::Validator non_empty([](std::string& s) { return s.empty() ? std::string("expected a non-empty value") : std::string(); },
+                               "NON-EMPTY");
+
+/// A finite, positive number of simulated seconds (nan, inf, 0 and negative values are refused).
+const CLI::Validator positive_seconds(
+    [](std::string& s) {
+      char* end = nullptr;
+      const double x = std::strtod(s.c_str(), &end);
+      const bool ok = !s.empty() && end == s.c_str() + s.size() && std::isfinite(x) && x > 0;
+      return ok ? std::string() : "'" + s + "': expected a positive, finite number of simulated seconds";
+    },
+    "SECONDS");
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -44,23 +62,26 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Run a case");
   add_case_options(run, run_opts, false);
   run->add_option("--end-time", run_opts.end_time, "End time [s] (overrides time.end)");
-  run->add_option("--subcycles", run_opts.subcycles, "Solid sub-steps per fluid step: N or auto (overrides coupling.subcycles)");
-  run->add_option("--output", run_opts.output, "Output folder (default out/<case name>)");
+  run->add_option("--subcycles", run_opts.subcycles, "Solid sub-steps per fluid step: N or auto (overrides coupling.subcycles)")
+      ->check(non_empty);
+  run->add_option("--output", run_opts.output, "Output folder (default out/<case name>)")->check(non_empty);
   run->add_flag("--overwrite", run_opts.overwrite, "Allow writing into an existing output folder");
   run->add_flag("--quiet", run_opts.quiet, "Print only the summary and errors");
   run->add_option("--checkpoint-every", run_opts.checkpoint_every,
                   "Write checkpoint_<t>.chk into the output folder every T simulated seconds, and at the end")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_seconds);
   run->add_option("--checkpoint-keep", run_opts.checkpoint_keep, "Keep only the newest N checkpoints of this run (default: all)")
       ->check(CLI::NonNegativeNumber);
   run->add_option("--restart", run_opts.restart,
                   "Continue from a checkpoint file (or a folder: its latest checkpoint); the case is the checkpoint's "
-                  "unless given; output in the checkpoint's folder unless --output");
+                  "unless given; output in the checkpoint's folder unless --output")
+      ->check(non_empty);
 
   RunOptions check_opts;
   auto* check = app.add_subcommand("check", "Validate a case; print particle counts per body and the memory estimate");
   add_case_options(check, check_opts, true);
-  check->add_option("--output", check_opts.output, "Also write the initial particles (.vtu/.pvd) into this folder");
+  check->add_option("--output", check_opts.output, "Also write the initial particles (.vtu/.pvd) into this folder")
+      ->check(non_empty);
 
   // Input errors are the same on every rank: only rank 0 prints them (and the help / version text).
   int rank = 0;
@@ -83,6 +104,9 @@ int main(int argc, char** argv) {
   } catch (const CaseError& e) {
     err << "mpsfsi: error: " << e.what() << "\n";
     return 2;
+  } catch (const OutputError& e) {
+    err << "mpsfsi: output error: " << e.what() << "\n";
+    return 4;
   } catch (const std::exception& e) {
     std::cerr << "mpsfsi: run failed" << (rank > 0 ? " (rank " + std::to_string(rank) + ")" : "") << ": " << e.what()
               << "\n";

@@ -2,6 +2,7 @@
 // the output-file marks and the preparation of a restart's output folder. See checkpoint.hpp.
 #include "coupling/checkpoint.hpp"
 
+#include "core/files.hpp"
 #include "core/version.hpp"
 #include "io/case.hpp"
 #include "io/vtk_writer.hpp"
@@ -217,25 +218,7 @@ void write_checkpoint(const std::string& path, const CheckpointInfo& info, const
   const std::uint64_t sum = fnv1a64(bytes.data(), bytes.size());
   w.u64(sum);
 
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (out) out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (out) out.close();
-    if (!out) {
-      const int err = errno;
-      std::error_code ignored;
-      fs::remove(tmp, ignored);
-      throw std::runtime_error(fmt::format("cannot write checkpoint '{}': {}", path, std::strerror(err)));
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw std::runtime_error(fmt::format("cannot write checkpoint '{}': renaming '{}' failed: {}", path, tmp,
-                                         std::strerror(err)));
-  }
+  write_file_atomically(path, bytes, "checkpoint");
 }
 
 Checkpoint read_checkpoint(const std::string& path, MPI_Comm comm) {

@@ -2,6 +2,7 @@
 #include "coupling/fsi_interface.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "solid/solid_solver.hpp"
 
@@ -213,7 +214,8 @@ void FsiInterface::advance_solid(SolidSolver& solid, const Real t, const Real dt
 
 void FsiInterface::open_csv(const std::string& path, const bool append) {
   csv_.open(path, append ? std::ios::app : std::ios::trunc);
-  if (!csv_) throw std::runtime_error("cannot write " + path);
+  csv_path_ = path;
+  check_written(csv_, csv_path_, "interface table");
   if (!append) csv_ << "time,body,fx,fy,work_step,work_total,wetted\n";
 }
 
@@ -283,6 +285,7 @@ void FsiInterface::write_csv(const Real t) {
     csv_ << fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g},{}\n", t, b.name, b.force[0], b.force[1], b.work_step,
                         b.work_total, b.n_wetted);
   csv_.flush();
+  check_written(csv_, csv_path_, "interface table");
 }
 
 }  // namespace mpsfsi

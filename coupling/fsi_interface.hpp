@@ -150,6 +150,7 @@ class FsiInterface {
   CellGrid solid_grid_;
   CellGrid grid_;
   std::ofstream csv_;
+  std::string csv_path_;
 };
 
 }  // namespace mpsfsi

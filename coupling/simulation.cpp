@@ -5,8 +5,10 @@
 // the solid's bond damping and the load relaxation of the case's coupling map.
 #include "coupling/simulation.hpp"
 
+#include "core/files.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/fsi_interface.hpp"
+#include "coupling/rank0.hpp"
 
 #include "fluid/fluid_solver.hpp"
 #include "io/probes.hpp"
@@ -48,6 +50,9 @@ long peak_memory_kib() {
   return u.ru_maxrss;
 }
 
+/// Wall time above which a run's projection is called absurd (a week).
+constexpr double absurd_wall_seconds = 7 * 24 * 3600.0;
+
 std::string format_duration(const double s) {
   if (!std::isfinite(s) || s < 0) return "?";
   const auto t = static_cast<long>(s + 0.5);
@@ -65,11 +70,7 @@ struct SpeedLimits {
 
   explicit SpeedLimits(const CaseSpec& spec) {
     for (const auto& m : spec.fluid_materials) fluid = std::max(fluid, m.c);
-    for (const auto& m : spec.solid_materials) {
-      const Real lambda = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu));
-      const Real mu = m.E / (2 * (1 + m.nu));
-      solid.push_back(std::sqrt((lambda + 2 * mu) / m.rho));
-    }
+    for (const auto& m : spec.solid_materials) solid.push_back(p_wave_speed(m, spec.solid));
   }
 };
 
@@ -77,7 +78,7 @@ struct SpeedLimits {
 class RunLoop {
  public:
   RunLoop(const CaseSpec& spec, Scene& scene, const RunSettings& settings, MPI_Comm comm)
-      : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec),
+      : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec), comm_(comm),
         writer_(settings.output_dir, "particles"),
         probes_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/probes.csv" : std::string(),
                 appends("probes.csv")),
@@ -85,6 +86,7 @@ class RunLoop {
                    appends("receivers.csv")) {
     MPI_Comm_rank(comm, &rank_);
     MPI_Comm_size(comm, &n_ranks_);
+    initial_fluid_ = fluid_per_body();
     log_ = rank_ == 0 && !settings.quiet;
     tty_ = log_ && isatty(fileno(stdout));
     const bool has_fluid = p_.n_of_kind(ParticleKind::fluid) > 0, has_solid = p_.n_of_kind(ParticleKind::solid) > 0;
@@ -118,6 +120,7 @@ class RunLoop {
       write_output();
       receivers_.record_if_due(t_, p_);
     }
+    report_projection();
     const Real eps = 1e-12 * std::max<Real>(1, spec_.time.end);
     const Real every = settings_.checkpoint_every;
     const auto next_checkpoint_after = [&](const Real t) { return (std::floor((t + eps) / every) + 1) * every; };
@@ -128,9 +131,15 @@ class RunLoop {
       step();
       receivers_.record_if_due(t_, p_);
       report_progress(t_start, false);
+      if (step_ - step_begin_ == 20) report_measured_projection(t_start);
       if (t_ >= next_output_ - eps) {
         write_output();
-        while (next_output_ <= t_ + eps) next_output_ += spec_.output.interval;
+        // The next output time after t_: one addition as a rule (bit for bit the accumulated times), several
+        // intervals at once when a step spans more than one.
+        const Real interval = spec_.output.interval;
+        const Real behind = std::floor((t_ + eps - next_output_) / interval) + 1;
+        next_output_ += behind > 1 ? behind * interval : interval;
+        if (!(next_output_ > t_ + eps)) next_output_ = t_ + interval;
       }
       if (every > 0 && t_ >= next_checkpoint - eps) {
         write_checkpoint_now();
@@ -164,7 +173,11 @@ class RunLoop {
       dt = spec_.solid.dt ? *spec_.solid.dt : solid_->stable_dt();
       limit = spec_.solid.dt ? "fixed" : "solid stability";
     }
-    dt = std::min(dt, spec_.time.end - t_);
+    if (spec_.time.end - t_ < dt) {
+      dt = spec_.time.end - t_;
+      limit = "end time";
+    }
+    step_limit_ = limit;
     int n_sub = 1;
     if (fluid_ && solid_) {
       // The solid's limit: stable_dt() = solid.dt_factor dp / c_p (dt_factor 0.2 by default; measured
@@ -213,6 +226,7 @@ class RunLoop {
         summary_.t_solid += seconds_since(t0);
       }
       check_state(step_ + 1, t_ + dt);
+      if (last_fluid_.n_removed > 0) check_losses(step_ + 1, t_ + dt);
     } catch (const RunFailure& e) {
       fail(e.what());
     } catch (const std::exception& e) {
@@ -256,6 +270,63 @@ class RunLoop {
     }
   }
 
+  /// Fluid particles of each body (by body index).
+  std::vector<std::size_t> fluid_per_body() const {
+    std::vector<std::size_t> n(p_.bodies.size(), 0);
+    for (std::size_t i = 0; i < p_.size(); ++i)
+      if (p_.kind[i] == ParticleKind::fluid) ++n[p_.body[i]];
+    return n;
+  }
+
+  /// A fluid body that lost more than fluid.max_loss of its particles through the domain's boundary stops
+  /// the run: the fluid fell or was flung out, and what is left is not the case that was asked for.
+  void check_losses(const std::size_t step, const Real t) const {
+    const std::vector<std::size_t> now = fluid_per_body();
+    for (std::size_t b = 0; b < now.size(); ++b) {
+      if (initial_fluid_[b] == 0) continue;
+      const std::size_t lost = initial_fluid_[b] - std::min(now[b], initial_fluid_[b]);
+      const Real share = static_cast<Real>(lost) / static_cast<Real>(initial_fluid_[b]);
+      if (share > spec_.fluid.max_loss)
+        throw RunFailure(fmt::format(
+            "step {} (t = {:.6g} s): {} of the {} particles ({:.1f} %) of fluid body '{}' have left the domain "
+            "[{:.4g}, {:.4g}] x [{:.4g}, {:.4g}], more than fluid.max_loss = {:g} %; the fluid fell or was flung out "
+            "(dt {:.3g} s limited by {}: check time.dt_max, time.cfl and the gravity, and that the walls hold the "
+            "fluid)",
+            step, t, lost, initial_fluid_[b], 100 * share, p_.bodies[b].name, spec_.domain.lo[0], spec_.domain.hi[0],
+            spec_.domain.lo[1], spec_.domain.hi[1], 100 * spec_.fluid.max_loss, last_fluid_.dt, step_limit_));
+    }
+  }
+
+  /// Before the first step: the number of steps the run needs at its first dt (and the solid's sub-steps),
+  /// with a warning when that cannot finish in any sensible time.
+  void report_projection() {
+    if (!log_) return;
+    const RunProjection r = project_run(spec_, p_, t_);
+    fmt::print("{}\n", r.text());
+    std::fflush(stdout);
+  }
+
+  /// After the first steps: the projected number of steps and wall time at the measured rate.
+  void report_measured_projection(const Clock::time_point t_start) {
+    if (rank_ != 0 || !(dt_ > 0)) return;
+    const double wall = seconds_since(t_start);
+    const double steps = static_cast<double>(step_ - step_begin_);
+    const double remaining_steps = (spec_.time.end - t_) / dt_;
+    const double remaining_wall = wall / steps * remaining_steps;
+    jsonl_ << fmt::format("{{\"event\":\"projection\",\"step\":{},\"remaining_steps\":{:.4g},\"remaining_wall\":{:.4g}}}\n",
+                          step_, remaining_steps, remaining_wall);
+    if (!log_) return;
+    fmt::print("{}projection after {} steps: about {:.3g} more steps at dt {:.3g} s ({}), {} of wall time at {:.3g} "
+               "steps/s\n",
+               tty_ ? "\n" : "", step_ - step_begin_, remaining_steps, dt_, limit_, format_duration(remaining_wall),
+               steps / std::max(wall, 1e-9));
+    if (remaining_wall > absurd_wall_seconds)
+      fmt::print("warning: at this rate the run needs {} of wall time; it cannot finish in any sensible time "
+                 "(coarsen dp, shorten time.end, or look at the dt limit '{}')\n",
+                 format_duration(remaining_wall), limit_);
+    std::fflush(stdout);
+  }
+
   /// Keep a copy of the particle set as the frame written if a later step fails. The copy costs about as much
   /// as a cheap solid step (17 % of a lamb_a step), so it is taken every k steps, with k chosen from the
   /// measured copy and step times such that the copies take at most ~2 % of the run; the frame is then at
@@ -294,15 +365,38 @@ class RunLoop {
                                  last_good_step_, frame));
   }
 
+  /// A frame, the probes and the interface table at t_. A file that cannot be written (disk full) stops the
+  /// run on every rank with OutputError; the series lists only the complete frames written before.
   void write_output() {
     const auto t0 = Clock::now();
     if (solid_) solid_->prepare_output(t_);
-    if (rank_ == 0) {
-      writer_.write(p_, t_);
-      probes_.record(t_, p_);
-      if (coupling_) coupling_->write_csv(t_);
+    try {
+      on_rank0(comm_, [&] {
+        if (!log_error_.empty()) throw OutputError(log_error_);  // found on rank 0 alone, stops all ranks here
+        writer_.write(p_, t_);
+        probes_.record(t_, p_);
+        if (coupling_) coupling_->write_csv(t_);
+      });
+    } catch (const OutputError& e) {
+      throw OutputError(stopped_by_output(e.what()));
     }
     summary_.t_output += seconds_since(t0);
+  }
+
+  /// The message of a run stopped because a file could not be written; also logged in run.jsonl.
+  std::string stopped_by_output(const std::string& what) {
+    const std::string frames =
+        writer_.n_frames() > 0
+            ? fmt::format("{} lists the {} complete frame(s) up to t = {:.6g} s", writer_.pvd_path(), writer_.n_frames(),
+                          writer_.frames().back().first)
+            : fmt::format("no frame was written");
+    const std::string text = fmt::format("{}\nthe run stopped at t = {:.6g} s (step {}); {}", what, t_, step_, frames);
+    if (rank_ == 0 && jsonl_.is_open()) {
+      jsonl_ << fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}\n", step_, t_,
+                            json_escape(text));
+      jsonl_.flush();  // may fail as well on a full disk: the message on stderr is the one that counts
+    }
+    return text;
   }
 
   void report_progress(const Clock::time_point t_start, const bool final) {
@@ -326,6 +420,7 @@ class RunLoop {
           "\"ppe_residual\":{:.3g},\"subcycles\":{},\"wall\":{:.3f}}}\n",
           step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.residual, summary_.last_subcycles, wall);
       jsonl_.flush();  // `tail -f run.jsonl` follows the run
+      if (!jsonl_ && log_error_.empty()) log_error_ = "cannot write run log '" + settings_.output_dir + "/run.jsonl'";
     }
     if (!log_) return;
     if (tty_) {
@@ -337,6 +432,7 @@ class RunLoop {
       }
     } else if (periodic || final) {
       fmt::print("{}\n", line);
+      std::fflush(stdout);  // a redirected log gets each line as it is printed
     }
   }
 
@@ -365,10 +461,18 @@ class RunLoop {
     receivers_.save_state(w);
   }
 
-  /// Writes checkpoint_<t>.chk into the output folder (rank 0; every rank holds the same state).
+  /// Writes checkpoint_<t>.chk into the output folder (rank 0, which holds the same state as every rank);
+  /// a failure stops the run on every rank.
   void write_checkpoint_now() {
+    try {
+      on_rank0(comm_, [&] { write_checkpoint_on_rank0(); });
+    } catch (const OutputError& e) {
+      throw OutputError(stopped_by_output(e.what()));
+    }
+  }
+
+  void write_checkpoint_on_rank0() {
     const auto t0 = Clock::now();
-    if (rank_ != 0) return;
     BinaryWriter w;
     save_run_state(w);
     p_.save_state(w);
@@ -477,6 +581,10 @@ class RunLoop {
   ParticleSet& p_;
   const RunSettings& settings_;
   const SpeedLimits limits_;
+  MPI_Comm comm_;
+  std::vector<std::size_t> initial_fluid_;  ///< fluid particles per body at the start of the case
+  std::string step_limit_ = "-";            ///< the dt limit of the step being taken
+  std::string log_error_;                   ///< rank 0: run.jsonl could not be written (reported at the next output)
   VtkSeriesWriter writer_;
   ProbeWriter probes_;
   ReceiverWriter receivers_;  ///< receivers.csv (rank 0), rows every step or every receivers.interval
@@ -509,6 +617,50 @@ class RunLoop {
 };
 
 }  // namespace
+
+RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real t) {
+  RunProjection r;
+  Real v_max = 0, nu = 0, c_p = 0;
+  std::size_t n_fluid = 0, n_solid = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const auto m = static_cast<std::size_t>(std::max<int>(0, p.material[i]));
+    if (p.kind[i] == ParticleKind::fluid && m < spec.fluid_materials.size()) {
+      ++n_fluid;
+      v_max = std::max(v_max, p.velocity[i].norm());
+      nu = std::max(nu, spec.fluid_materials[m].nu);
+    } else if (p.kind[i] == ParticleKind::solid && m < spec.solid_materials.size()) {
+      ++n_solid;
+      c_p = std::max(c_p, p_wave_speed(spec.solid_materials[m], spec.solid));
+    }
+  }
+  const Real dt_solid = c_p > 0 ? spec.solid.dt_factor * spec.dp / c_p : 0;
+  if (n_fluid > 0) {
+    r.dt = fluid_stable_dt(spec.time, spec.dp, nu, spec.gravity.norm(), v_max, FluidOptions{}.viscous_number, &r.limit);
+    if (n_solid > 0) r.subcycles = choose_subcycles(spec.coupling.subcycles, r.dt, dt_solid).n;
+  } else if (n_solid > 0) {
+    r.dt = spec.solid.dt ? *spec.solid.dt : dt_solid;
+    r.limit = spec.solid.dt ? "fixed" : "solid stability";
+  }
+  if (!(r.dt > 0)) return r;
+  r.n_steps = std::max<Real>(0, spec.time.end - t) / r.dt;
+  r.n_solid_steps = n_solid == 0 ? 0 : n_fluid > 0 ? r.n_steps * r.subcycles : r.n_steps;
+  r.particle_steps = static_cast<double>(p.size()) * (n_fluid > 0 ? r.n_steps : 0) +
+                     static_cast<double>(n_solid) * r.n_solid_steps;
+  r.absurd = !(r.particle_steps <= 1e12) || !(r.n_steps <= 1e8);
+  return r;
+}
+
+std::string RunProjection::text() const {
+  if (!(dt > 0)) return "projection: nothing to step";
+  std::string s = fmt::format("projection: {:.3g} steps of dt = {:.3g} s ({})", n_steps, dt, limit);
+  if (subcycles > 1) s += fmt::format(", each with {} solid sub-steps ({:.3g} in all)", subcycles, n_solid_steps);
+  s += fmt::format("; {:.3g} particle-steps", particle_steps);
+  if (absurd)
+    s += fmt::format("\nwarning: {:.3g} particle-steps cannot finish in any sensible time (weeks or more on one "
+                     "core); check dp, time.end, the dt limit '{}'{}",
+                     particle_steps, limit, subcycles > 1 ? " and coupling.subcycles" : "");
+  return s;
+}
 
 int resolve_subcycles(const int requested, const Real dt_fluid, const Real dt_solid) {
   return choose_subcycles(requested, dt_fluid, dt_solid).n;

@@ -6,6 +6,7 @@
 // (coupling/checkpoint.hpp). Only this folder sees both the fluid and the solid.
 #pragma once
 
+#include "core/particles.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
 
@@ -57,6 +58,25 @@ class RunFailure : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+/// What a run needs from time t on at its first time step: printed by `check` and at the start of `run`.
+struct RunProjection {
+  Real dt = 0;                  ///< the first step: fluid step, or the solid's step in a solid-only run [s]
+  std::string limit;            ///< what limits it ("cfl", "viscous", "solid stability", ...)
+  double n_steps = 0;           ///< steps to the end time at that dt
+  int subcycles = 1;            ///< solid sub-steps per fluid step (coupled runs)
+  double n_solid_steps = 0;     ///< solid steps in all (sub-steps of a coupled run)
+  double particle_steps = 0;    ///< all particles x fluid steps + solid particles x solid steps: the work
+  /// More work than any sensible run: above 1e12 particle-steps (weeks on one core at the measured ~1.4 us
+  /// per particle and step, docs/performance.md), or above 1e8 steps.
+  bool absurd = false;
+  /// "projection: ..." and, when absurd, a second line "warning: ...".
+  std::string text() const;
+};
+
+/// The projection of a case from time t at the current state of `particles` (the first dt of the fluid's
+/// limits, fluid_stable_dt, and of the solid's, dt_factor dp / c_p).
+RunProjection project_run(const CaseSpec& spec, const ParticleSet& particles, Real t = 0);
 
 /// Run a case to its end time. Throws RunFailure (after writing the last good frame) when the
 /// state becomes invalid.

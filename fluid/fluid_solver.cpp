@@ -49,6 +49,7 @@ struct FluidSolver::Impl {
   Impl(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
       : p(particles), opt(options), motion(make_tank_motion(spec.tank_motion)) {
     MPI_Comm_rank(comm, &rank);
+    this->comm = comm;
     dp = spec.dp;
     re_g = spec.fluid.re_gradient * dp;
     re_l = spec.fluid.re_laplacian * dp;
@@ -433,6 +434,7 @@ struct FluidSolver::Impl {
   std::vector<GlobalId> row_of;
   std::vector<LocalIndex> particle_of_row;
   LocalRows sys;
+  MPI_Comm comm = MPI_COMM_NULL;
   std::vector<Real> x_all;
   std::vector<std::uint8_t> remove;
 };
@@ -454,27 +456,37 @@ FluidSolver::~FluidSolver() = default;
 
 Real FluidSolver::stable_dt(std::string* limit) const {
   const Impl& m = *impl_;
-  const auto name = [&](const char* s) {
-    if (limit) *limit = s;
-  };
-  if (m.time.dt) {
-    name("fixed");
-    return *m.time.dt;
-  }
+  if (m.time.dt) return fluid_stable_dt(m.time, m.dp, m.nu, 0, 0, m.opt.viscous_number, limit);
   Real v_max = 0;
   for (std::size_t i = 0; i < m.p.size(); ++i)
     if (m.p.kind[i] == ParticleKind::fluid || (m.motion.moving() && m.p.kind[i] == ParticleKind::wall))
       v_max = std::max(v_max, m.p.velocity[i].squaredNorm());
-  v_max = std::sqrt(v_max);
-  Real dt = m.time.dt_max;
+  return fluid_stable_dt(m.time, m.dp, m.nu, m.gravity.norm(), std::sqrt(v_max), m.opt.viscous_number, limit);
+}
+
+Real fluid_stable_dt(const TimeSpec& time, const Real dp, const Real nu, const Real acceleration, const Real v_max,
+                     const Real viscous_number, std::string* limit) {
+  const auto name = [&](const char* s) {
+    if (limit) *limit = s;
+  };
+  if (time.dt) {
+    name("fixed");
+    return *time.dt;
+  }
+  Real dt = time.dt_max;
   name("dt_max");
-  const Real courant = m.time.cfl ? *m.time.cfl : 0.2;
-  if (v_max > 0 && courant * m.dp / v_max < dt) {  // eq. 52
-    dt = courant * m.dp / v_max;
+  const Real courant = time.cfl ? *time.cfl : 0.2;
+  if (v_max > 0 && courant * dp / v_max < dt) {  // eq. 52
+    dt = courant * dp / v_max;
     name("cfl");
   }
-  if (m.nu > 0 && m.opt.viscous_number * m.dp * m.dp / m.nu < dt) {
-    dt = m.opt.viscous_number * m.dp * m.dp / m.nu;
+  // Eq. 52 for the speed a particle at rest reaches within the step: a dt <= courant dp / v_max after it.
+  if (acceleration > 0 && std::sqrt(courant * dp / acceleration) < dt) {
+    dt = std::sqrt(courant * dp / acceleration);
+    name("acceleration");
+  }
+  if (nu > 0 && viscous_number * dp * dp / nu < dt) {
+    dt = viscous_number * dp * dp / nu;
     name("viscous");
   }
   return dt;
@@ -511,6 +523,17 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   t0 = Clock::now();
   m.assemble(dt);
   report.t_assembly += seconds_since(t0);
+  // A system with an overflow (rho / dt^2 for a vanishing dt, huge velocities) cannot be solved: say why
+  // instead of the Krylov solver's NaN message. All ranks agree before the solve, which is collective.
+  int finite = std::all_of(m.sys.value.begin(), m.sys.value.end(), [](const Real v) { return std::isfinite(v); }) &&
+               std::all_of(m.sys.rhs.begin(), m.sys.rhs.end(), [](const Real v) { return std::isfinite(v); });
+  MPI_Allreduce(MPI_IN_PLACE, &finite, 1, MPI_INT, MPI_MIN, m.comm);
+  if (!finite)
+    throw std::runtime_error(fmt::format(
+        "the pressure system is not finite at dt = {:.3g} s (its terms scale as rho / dt^2 = {:.3g}): the time step "
+        "is too small for double precision or the velocities overflowed; use a dt of at least ~1e-9 s (time.dt, "
+        "time.dt_max) and check the run's earlier steps",
+        dt, m.rho / (dt * dt)));
   const PressureSolveResult res = m.solve_pressure();
   report.t_assembly += res.t_matrix;
   report.t_setup = res.t_setup;

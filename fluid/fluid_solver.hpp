@@ -56,6 +56,13 @@ struct FluidOptions {
   std::string density_offset_field;
 };
 
+/// Largest admissible fluid dt: time.dt when fixed, else the smallest of time.dt_max, the CFL limit of
+/// eq. 52 for the largest speed v_max, the same limit for a particle that starts at rest under the
+/// acceleration |g| (sqrt(C dp / |g|)) and the viscous limit viscous_number dp^2 / nu. `limit`, if given,
+/// receives the name of the active limit ("fixed", "dt_max", "cfl", "acceleration", "viscous").
+Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, Real v_max, Real viscous_number,
+                     std::string* limit = nullptr);
+
 class FluidSolver {
  public:
   /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`. All ranks of `comm`
@@ -65,8 +72,7 @@ class FluidSolver {
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;
 
-  /// Largest admissible dt now: the fixed dt of the case, or the CFL (eq. 52) and viscous limits.
-  /// `limit`, if given, receives the name of the active limit ("fixed", "cfl", "viscous", "dt_max").
+  /// Largest admissible dt now (fluid_stable_dt for the fluid's largest speed and the gravity).
   Real stable_dt(std::string* limit = nullptr) const;
   /// One semi-implicit step (seed 004 eq. 16-24) from time t to t + dt.
   FluidStepReport advance(Real t, Real dt);

@@ -136,6 +136,7 @@ struct FluidNumerics {
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between
   LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
+  Real max_loss = 0.05;
 };
 
 struct SolidNumerics {

@@ -1,6 +1,7 @@
 // Probe evaluation and CSV output.
 #include "io/probes.hpp"
 
+#include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "io/tank_motion_spec.hpp"
 
@@ -49,7 +50,8 @@ ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, con
   }
   if (probes_.empty() || path.empty()) return;
   out_.open(path, append ? std::ios::app : std::ios::trunc);
-  if (!out_) throw std::runtime_error("cannot write probe file " + path);
+  path_ = path;
+  check_written(out_, path_, "probe table");
   if (append) return;
   out_ << "time";
   for (const auto& c : columns_) out_ << "," << c;
@@ -104,6 +106,7 @@ void ProbeWriter::record(const Real t, const ParticleSet& particles) {
   for (const Real v : evaluate(particles, t)) out_ << fmt::format(",{:.9g}", v);
   out_ << "\n";
   out_.flush();
+  check_written(out_, path_, "probe table");
 }
 
 }  // namespace mpsfsi

@@ -40,6 +40,7 @@ class ProbeWriter {
   std::vector<Probe> probes_;
   std::vector<std::string> columns_;
   std::ofstream out_;
+  std::string path_;
 };
 
 }  // namespace mpsfsi

@@ -42,7 +42,8 @@ ReceiverWriter::ReceiverWriter(const CaseSpec& spec, const ParticleSet& particle
   }
   if (receivers_.empty() || path.empty()) return;
   out_.open(path, append ? std::ios::app : std::ios::trunc);
-  if (!out_) throw std::runtime_error("cannot write receiver file " + path);
+  path_ = path;
+  check_written(out_, path_, "receiver table");
   if (append) return;
   out_ << "time";
   for (const auto& c : columns_) out_ << "," << c;
@@ -107,7 +108,7 @@ void ReceiverWriter::record_if_due(const Real t, const ParticleSet& particles) {
   out_ << fmt::format("{:.9g}", t);
   for (const Vec& u : evaluate(particles)) out_ << fmt::format(",{:.9g},{:.9g}", u[0], u[1]);
   out_ << "\n";
-  if (++rows_ % 256 == 0) out_.flush();
+  if (++rows_ % 256 == 0) flush();
 }
 
 }  // namespace mpsfsi

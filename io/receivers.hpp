@@ -9,6 +9,7 @@
 #pragma once
 
 #include "core/binary_io.hpp"
+#include "core/files.hpp"
 #include "core/particles.hpp"
 #include "io/case.hpp"
 
@@ -34,7 +35,9 @@ class ReceiverWriter {
   const std::vector<std::string>& columns() const { return columns_; }
   /// Push the rows written so far to the file (before a checkpoint marks the file's size).
   void flush() {
-    if (out_.is_open()) out_.flush();
+    if (!out_.is_open()) return;
+    out_.flush();
+    check_written(out_, path_, "receiver table");
   }
   /// Checkpoints: the row schedule (next row time, rows written).
   void save_state(BinaryWriter& w) const;
@@ -56,6 +59,7 @@ class ReceiverWriter {
   bool started_ = false;
   std::size_t rows_ = 0;
   std::ofstream out_;
+  std::string path_;
 };
 
 }  // namespace mpsfsi

@@ -4,6 +4,8 @@
 // the same way. Also reads .pvd files back (read_pvd) for restarts, tests and tools.
 #include "io/vtk_writer.hpp"
 
+#include "core/files.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -127,26 +129,15 @@ bool find_attribute(const std::string& tag, const std::string& name, std::string
   return false;
 }
 
-/// Creates the output directory if missing; throws std::runtime_error naming `target` (the file
-/// about to be written) and the directory on failure.
+/// Creates the output directory if missing; throws OutputError naming `target` (the file about to be
+/// written) and the directory on failure.
 void ensure_directory(const std::string& directory, const std::string& target) {
   std::error_code ec;
   fs::create_directories(directory, ec);
-  if (ec || !fs::is_directory(directory)) {
+  if (ec || !fs::is_directory(directory, ec)) {
     const std::string reason = ec ? ec.message() : "not a directory";
-    throw std::runtime_error(
+    throw OutputError(
         fmt::format("cannot write '{}': cannot create output directory '{}': {}", target, directory, reason));
-  }
-}
-
-/// Renames `from` to `to` (atomic on POSIX); removes `from` and throws naming `to` on failure.
-void rename_into_place(const std::string& from, const std::string& to) {
-  if (std::rename(from.c_str(), to.c_str()) != 0) {
-    const int err = errno;
-    std::error_code ignored;
-    fs::remove(from, ignored);
-    throw std::runtime_error(
-        fmt::format("cannot write '{}': renaming '{}' failed: {}", to, from, std::strerror(err)));
   }
 }
 
@@ -296,29 +287,27 @@ std::string VtkSeriesWriter::write(const ParticleSet& particles, const double ti
   time_value->SetValue(0, time);
   grid->GetFieldData()->AddArray(time_value);
 
-  // Write under a temporary name, then rename into place.
+  // VTK writes into memory (its error path on a full disk is not safe); the file is written by
+  // write_file_atomically, which checks every write and leaves no temporary file behind.
   ensure_directory(directory_, path);
-  const std::string tmp_path = path + ".tmp";
   vtkNew<VtkMessageCollector> messages;
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->AddObserver(vtkCommand::ErrorEvent, messages);
   writer->AddObserver(vtkCommand::WarningEvent, messages);
   vtkNew<VtkMessageCollector> pipeline_messages;  // only silences the pipeline's "returned failure" dump
   writer->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, pipeline_messages);
-  writer->SetFileName(tmp_path.c_str());
+  writer->WriteToOutputStringOn();
   writer->SetInputData(grid);
   writer->SetDataModeToBinary();
   writer->SetCompressorTypeToZLib();
   writer->SetHeaderTypeToUInt64();  // no 4 GiB limit on an array
   const int ok = writer->Write();
   if (ok != 1 || writer->GetErrorCode() != 0) {
-    std::error_code ignored;
-    fs::remove(tmp_path, ignored);
     const std::string reason = messages->messages.empty() ? std::string("vtkXMLUnstructuredGridWriter failed")
                                                           : messages->messages;
-    throw std::runtime_error(fmt::format("cannot write VTK file '{}': {}", path, reason));
+    throw OutputError(fmt::format("cannot write VTK frame '{}': {}", path, reason));
   }
-  rename_into_place(tmp_path, path);
+  write_file_atomically(path, writer->GetOutputString(), "VTK frame");
 
   frames_.emplace_back(time, file_name);
   try {
@@ -343,22 +332,7 @@ void VtkSeriesWriter::write_pvd() const {
   }
   text += "  </Collection>\n</VTKFile>\n";
 
-  const std::string tmp_path = pvd_path_ + ".tmp";
-  {
-    std::ofstream out(tmp_path, std::ios::binary | std::ios::trunc);
-    if (out) {
-      out << text;
-      out.close();
-    }
-    if (!out) {
-      const int err = errno;
-      std::error_code ignored;
-      fs::remove(tmp_path, ignored);
-      throw std::runtime_error(fmt::format("cannot write '{}': writing '{}' failed: {}", pvd_path_, tmp_path,
-                                           std::strerror(err)));
-    }
-  }
-  rename_into_place(tmp_path, pvd_path_);
+  write_file_atomically(pvd_path_, text, "series file");
 }
 
 void VtkSeriesWriter::adopt_existing(const double up_to_time, const std::size_t first_new_frame) {

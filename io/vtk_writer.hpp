@@ -25,8 +25,8 @@ class VtkSeriesWriter {
   /// vector field of the particles makes write() throw std::invalid_argument.
   void set_fields(std::vector<std::string> fields);
 
-  /// Write a frame at simulated time t; returns the .vtu path. Throws std::runtime_error naming the
-  /// path on I/O failure, std::invalid_argument for a non-finite time, arrays whose length differs
+  /// Write a frame at simulated time t; returns the .vtu path. Throws OutputError (core/files.hpp)
+  /// naming the path on I/O failure, std::invalid_argument for a non-finite time, arrays whose length differs
   /// from the particle count, or an extra field named like a core array.
   std::string write(const ParticleSet& particles, double time);
 
@@ -41,7 +41,7 @@ class VtkSeriesWriter {
   /// overwritten by the new frames). The .pvd is rewritten at once to list only the adopted frames.
   /// No .pvd: nothing is adopted and the series starts empty. New frames are numbered from
   /// first_new_frame at least (a restart into a new folder keeps the frame numbers of the original run).
-  /// Throws std::runtime_error if the .pvd exists but cannot be read or rewritten.
+  /// Throws std::runtime_error if the .pvd exists but cannot be read, OutputError if it cannot be rewritten.
   void adopt_existing(double up_to_time, std::size_t first_new_frame = 0);
   /// Number the next frame `frame` (a restart that starts a new series keeps the original numbering).
   void set_next_frame(std::size_t frame) { next_frame_ = frame; }

@@ -29,6 +29,7 @@
 #include "solid/solid_solver.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "io/tank_motion_spec.hpp"
@@ -52,16 +53,10 @@ namespace {
 
 constexpr Real n_c = 0.5;  ///< surface threshold of eq. 48
 
-struct Lame {
-  Real lambda = 0;
-  Real mu = 0;
-};
+}  // namespace
 
-/// Lame constants of the 2D model: from vp, vs when given (seed 000 §4), else eq. 4 (plane strain),
-/// optionally reduced to plane stress (lambda* = 2 lambda mu / (lambda + 2 mu)). A wide plate (plane stress
-/// only) uses E / (1 - nu^2) in place of E: the bending modulus of a plate in cylindrical bending.
-Lame lame_constants(const SolidMaterial& m, const SolidNumerics& numerics) {
-  Lame l;
+LameConstants lame_constants(const SolidMaterial& m, const SolidNumerics& numerics) {
+  LameConstants l;
   if (m.vp && m.vs) {
     l.mu = m.rho * *m.vs * *m.vs;
     l.lambda = m.rho * (*m.vp * *m.vp - 2 * *m.vs * *m.vs);
@@ -74,7 +69,10 @@ Lame lame_constants(const SolidMaterial& m, const SolidNumerics& numerics) {
   return l;
 }
 
-}  // namespace
+Real p_wave_speed(const SolidMaterial& m, const SolidNumerics& numerics) {
+  const LameConstants l = lame_constants(m, numerics);
+  return std::sqrt((l.lambda + 2 * l.mu) / m.rho);
+}
 
 struct SolidSolver::Impl {
   struct Load {
@@ -145,6 +143,7 @@ struct SolidSolver::Impl {
   std::vector<int> uf_parent;
   std::string out_dir;
   bool csv_started = false;
+  bool breakable = false;  ///< some material has a fracture strain: fragments.csv is written
 
   Impl(const CaseSpec& spec, ParticleSet& particles);
   std::size_t n() const { return pid.size(); }
@@ -227,7 +226,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   fragment.assign(ns, 0);
   uf_parent.resize(ns);
 
-  std::vector<Lame> lame;
+  std::vector<LameConstants> lame;
   for (const auto& m : spec.solid_materials) lame.push_back(lame_constants(m, spec.solid));
   Real mu_max = 0;
   for (std::size_t k = 0; k < ns; ++k) {
@@ -242,13 +241,14 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
     lambda[k] = lame[static_cast<std::size_t>(mat)].lambda;
     mu[k] = lame[static_cast<std::size_t>(mat)].mu;
     mu_max = std::max(mu_max, mu[k]);
-    c_p_max = std::max(c_p_max, std::sqrt((lambda[k] + 2 * mu[k]) / m.rho));
+    c_p_max = std::max(c_p_max, p_wave_speed(m, spec.solid));
     eps_max[k] = m.fracture_strain ? *m.fracture_strain : std::numeric_limits<Real>::infinity();
     clamped[k] = p.clamped[i];
     if (!(lambda[k] + 2 * mu[k] > 0) || !(mu[k] > 0))
       throw CaseError(fmt::format("{}: solid material '{}': expected mu > 0 and lambda + 2 mu > 0 (check vp > sqrt(2) vs)",
                                   spec.file, m.name));
   }
+  breakable = std::any_of(eps_max.begin(), eps_max.end(), [](const Real e) { return std::isfinite(e); });
 
   // Initial spin: a body given an angular velocity rotates rigidly, so its particles spin with it.
   for (std::size_t k = 0; k < ns; ++k) {
@@ -733,8 +733,8 @@ void SolidSolver::prepare_output(const Real t) {
     (*m.f_fragment)[i] = m.fragment[k];
     (*m.f_surface)[i] = m.surface[k];
   }
-  if (m.out_dir.empty()) return;
-  // fragments.csv: one row per fragment and output time.
+  if (m.out_dir.empty() || !m.breakable) return;
+  // fragments.csv (bodies that can break): one row per fragment and output time.
   std::vector<Real> f_mass(m.n_frag, 0);
   std::vector<Vec> f_centroid(m.n_frag, Vec::Zero());
   std::vector<std::size_t> f_count(m.n_frag, 0);
@@ -748,7 +748,7 @@ void SolidSolver::prepare_output(const Real t) {
   }
   const std::string path = m.out_dir + "/fragments.csv";
   std::ofstream out(path, m.csv_started ? std::ios::app : std::ios::trunc);
-  if (!out) throw std::runtime_error("cannot write " + path);
+  check_written(out, path, "fragment table");
   if (!m.csv_started) out << "time,n_fragments,fragment,body,particles,mass,centroid_x,centroid_y\n";
   m.csv_started = true;
   for (std::size_t f = 0; f < m.n_frag; ++f) {
@@ -756,6 +756,8 @@ void SolidSolver::prepare_output(const Real t) {
     out << fmt::format("{:.9g},{},{},{},{},{:.9g},{:.9g},{:.9g}\n", t, m.n_frag, f,
                        m.p.bodies[static_cast<std::size_t>(f_body[f])].name, f_count[f], f_mass[f], c[0], c[1]);
   }
+  out.flush();
+  check_written(out, path, "fragment table");
 }
 
 SolidDiagnostics SolidSolver::diagnostics() const {

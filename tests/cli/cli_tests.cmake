@@ -40,9 +40,31 @@ mpsfsi_cli_test(fail_runaway 3 "moves at .* m/s, faster than the fluid's sound s
   run ${db} --quiet --overwrite --output ${run_dir}/runaway --end-time 0.2 --set time.cfl=~ --set time.dt_max=~ --set time.dt=0.01)
 mpsfsi_cli_test(fail_ppe_not_converged 3 "pressure solve did not converge: 2 iterations.*last good frame"
   run ${db} --quiet --overwrite --output ${run_dir}/ppe --end-time 0.01 --set fluid.max_iterations=2)
+# Water flung up out of the domain: removed and counted while at most fluid.max_loss of the body is gone, then
+# the run stops with exit 3 (issue 13: it used to lose every particle and exit 0).
 mpsfsi_cli_test(fluid_leaves_domain 0 "fluid particles left the domain and were removed"
   run ${PROJECT_SOURCE_DIR}/cases/hydrostatic.yaml --quiet --overwrite --output ${run_dir}/leave --end-time 0.35
+  --set gravity=[0,9.81] --set "domain={min: [-0.05, -0.05], max: [0.25, 0.32]}" --set fluid.max_loss=1)
+mpsfsi_cli_test(fluid_lost_stops_the_run 3 "of fluid body 'water' have left the domain.*more than fluid.max_loss = 5 %"
+  run ${PROJECT_SOURCE_DIR}/cases/hydrostatic.yaml --quiet --overwrite --output ${run_dir}/lost --end-time 0.35
   --set gravity=[0,9.81] --set "domain={min: [-0.05, -0.05], max: [0.25, 0.32]}")
+add_test(NAME cli_mpi_fluid_lost_stops_the_run
+         COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|run|${PROJECT_SOURCE_DIR}/cases/hydrostatic.yaml|--quiet|--overwrite|--output|${run_dir}/lost_mpi|--end-time|0.35|--set|gravity=[0,9.81]|--set|domain={min: [-0.05, -0.05], max: [0.25, 0.32]}"
+                 -DCODE=3 "-DREGEX=more than fluid.max_loss = 5 %" -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
+set_tests_properties(cli_mpi_fluid_lost_stops_the_run PROPERTIES LABELS mpi)
+# A huge dt_max: the first step is limited by the gravity (acceleration), the water stays in the tank.
+mpsfsi_cli_test(huge_dt_max_first_step_limited_by_gravity 0 "dt 9.03e-03 s \\(acceleration\\)"
+  run ${db} --overwrite --output ${run_dir}/huge_dt_max --end-time 0.01 --set time.dt_max=1e10)
+
+# Command-line values that are refused (exit 2) rather than taken as defaults or as nothing.
+mpsfsi_cli_test(checkpoint_every_nan 2 "--checkpoint-every.*'nan': expected a positive, finite number"
+  run ${db} --output ${run_dir}/ck_nan --checkpoint-every nan)
+mpsfsi_cli_test(checkpoint_every_zero 2 "--checkpoint-every.*'0': expected a positive, finite number"
+  run ${db} --output ${run_dir}/ck_zero --checkpoint-every 0)
+# Output folders that cannot be one: exit 2 naming --output, not a raw filesystem error.
+mpsfsi_cli_test(output_is_a_file 2 "--output /dev/null: exists and is not a folder" run ${db} --output /dev/null --end-time 0.01)
+mpsfsi_cli_test(output_under_a_file 2 "--output .*dam_break.yaml/sub: cannot create the folder"
+  run ${db} --output ${db}/sub --end-time 0.01)
 mpsfsi_cli_test(existing_output_refused 2 "exists and is not empty.*--overwrite"
   run ${db} --quiet --output ${PROJECT_SOURCE_DIR}/cases --end-time 0.01)
 
@@ -52,3 +74,13 @@ add_test(NAME run_all_shipped_cases
                  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/case_runs -DEND=2e-4
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/all_cases.cmake)
 set_tests_properties(run_all_shipped_cases PROPERTIES LABELS cases TIMEOUT 600)
+
+# A run's outputs: disk full while frames are written (exit 4, complete frames only), progress lines flushed
+# to a pipe, fragments.csv only for breakable solids, empty option values refused.
+find_package(Python3 COMPONENTS Interpreter)
+if(Python3_Interpreter_FOUND)
+  add_test(NAME cli_run_outputs
+           COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/cli/run_output_test.py $<TARGET_FILE:mpsfsi>
+                   ${PROJECT_SOURCE_DIR}/cases ${CMAKE_CURRENT_BINARY_DIR}/cli_run_outputs)
+  set_tests_properties(cli_run_outputs PROPERTIES LABELS unit TIMEOUT 300)
+endif()
