@@ -3,6 +3,7 @@
 
 #include "core/binary_io.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <stdexcept>
 
@@ -26,17 +27,32 @@ std::size_t ParticleSet::n_of_kind(const ParticleKind k) const {
 
 LocalIndex ParticleSet::add(const Vec& x, const Vec& v, const ParticleKind k, const int body_index,
                             const int material_index, const bool is_clamped) {
+  assert(n_ghost_ == 0 && "owned particles come before the ghosts");
   const auto i = static_cast<LocalIndex>(size());
+  index_stale_ = true;
   position.push_back(x);
   velocity.push_back(v);
   kind.push_back(k);
   body.push_back(static_cast<std::uint16_t>(body_index));
   material.push_back(static_cast<std::int16_t>(material_index));
   clamped.push_back(is_clamped ? 1 : 0);
-  global_id.push_back(static_cast<GlobalId>(i));
+  global_id.push_back(next_id_++);
   for (auto& [name, f] : scalar_fields_) f.push_back(scalar_defaults_[name]);
   for (auto& [name, f] : vector_fields_) f.push_back(vector_defaults_[name]);
   return i;
+}
+
+LocalIndex ParticleSet::local_index(const GlobalId id) const {
+  if (index_stale_) {
+    index_of_.clear();
+    index_of_.reserve(size());
+    for (std::size_t i = 0; i < size(); ++i) index_of_.emplace(global_id[i], static_cast<LocalIndex>(i));
+    index_stale_ = false;
+  }
+  const auto it = index_of_.find(id);
+  if (it == index_of_.end()) return -1;
+  assert(global_id[static_cast<std::size_t>(it->second)] == id && "global_id changed behind the set's back");
+  return it->second;
 }
 
 void ParticleSet::reserve(const std::size_t n) {
@@ -110,14 +126,17 @@ void ParticleSet::for_each_array(F&& f) {
 }
 
 void ParticleSet::reorder(const std::vector<LocalIndex>& order) {
-  assert(order.size() == size());
+  assert(order.size() == size() && n_ghost_ == 0);
   for_each_array([&](auto& a) { permute(a, order); });
+  index_stale_ = true;
 }
 
 std::size_t ParticleSet::remove_if(const std::vector<std::uint8_t>& remove) {
   assert(remove.size() == size());
+  assert(n_ghost_ == 0);
   const std::size_t before = size();
   for_each_array([&](auto& a) { compact(a, remove); });
+  index_stale_ = true;
   return before - size();
 }
 
@@ -212,6 +231,9 @@ void ParticleSet::load_state(BinaryReader& in) {
   global_id.swap(next.global_id);
   for (auto& [name, a] : scalar_fields_) a.swap(next.scalar_fields_[name]);
   for (auto& [name, a] : vector_fields_) a.swap(next.vector_fields_[name]);
+  n_ghost_ = 0;
+  index_stale_ = true;
+  next_id_ = global_id.empty() ? 0 : *std::max_element(global_id.begin(), global_id.end()) + 1;
 }
 
 }  // namespace mpsfsi

@@ -1,6 +1,9 @@
 // Structure-of-arrays particle storage. Every particle has position, velocity, kind, body,
 // material, a clamp flag and a global id; physics modules register extra named per-particle
 // fields (pressure, rotation angle, ...) that are stored, reordered and written out with the rest.
+// The set holds this rank's owned particles first and then its ghosts (read-only copies of other
+// ranks' particles near its region); the global id is a particle's identity on every rank, and
+// local_index() is the one map from global id to local index that every module uses.
 #pragma once
 
 #include "core/types.hpp"
@@ -8,6 +11,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace mpsfsi {
@@ -41,10 +45,21 @@ class ParticleSet {
 
   std::vector<BodyInfo> bodies;
 
+  /// Owned particles and ghosts: the particles a rank computes with.
   std::size_t size() const { return position.size(); }
+  /// Owned particles are [0, n_owned()): this rank advances them. Ghosts are [n_owned(), size()): read-only
+  /// copies of other ranks' particles within the interaction radius of this rank's region (none on one rank).
+  std::size_t n_owned() const { return size() - n_ghost_; }
+  std::size_t n_ghost() const { return n_ghost_; }
   std::size_t n_of_kind(ParticleKind k) const;
 
-  /// Append one particle; the extra fields get their default value. Returns its local index.
+  /// Local index (owned or ghost) of the particle with global id `id`, or -1 if this rank does not hold it.
+  /// The map is rebuilt after add, reorder, remove_if and load_state; `global_id` is not to be assigned
+  /// otherwise.
+  LocalIndex local_index(GlobalId id) const;
+
+  /// Append one owned particle with the next unused global id (0, 1, 2, ... for a scene built on one rank);
+  /// the extra fields get their default value. Returns its local index.
   LocalIndex add(const Vec& x, const Vec& v, ParticleKind k, int body_index, int material_index,
                  bool is_clamped = false);
   void reserve(std::size_t n);
@@ -82,6 +97,10 @@ class ParticleSet {
   template <class F>
   void for_each_array(F&& f);
 
+  std::size_t n_ghost_ = 0;
+  GlobalId next_id_ = 0;  ///< global id of the next particle added
+  mutable std::unordered_map<GlobalId, LocalIndex> index_of_;  ///< built by local_index() when stale
+  mutable bool index_stale_ = true;
   std::map<std::string, std::vector<Real>> scalar_fields_;
   std::map<std::string, std::vector<Vec>> vector_fields_;
   std::map<std::string, Real> scalar_defaults_;

@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 
 #include <stdexcept>
-#include <unordered_map>
 
 namespace mpsfsi {
 
@@ -74,14 +73,10 @@ void ReceiverWriter::resolve(const ParticleSet& p) const {
       moved = i >= p.size() || p.global_id[i] != r.id[q];
     }
   if (!moved) return;
-  std::unordered_map<GlobalId, LocalIndex> index_of;
-  index_of.reserve(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) index_of.emplace(p.global_id[i], static_cast<LocalIndex>(i));
   for (const auto& r : receivers_)
     for (std::size_t q = 0; q < r.id.size(); ++q) {
-      const auto it = index_of.find(r.id[q]);
-      if (it == index_of.end()) throw std::logic_error("ReceiverWriter: a receiver particle disappeared");
-      r.at[q] = it->second;
+      r.at[q] = p.local_index(r.id[q]);
+      if (r.at[q] < 0) throw std::logic_error("ReceiverWriter: a receiver particle disappeared");
     }
 }
 

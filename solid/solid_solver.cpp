@@ -45,7 +45,6 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
-#include <unordered_map>
 
 namespace mpsfsi {
 
@@ -357,13 +356,9 @@ void SolidSolver::Impl::gather() {
   n_total = p.size();
   for (std::size_t k = 0; k < n() && !moved; ++k) moved = p.global_id[static_cast<std::size_t>(pid[k])] != gid[k];
   if (moved) {
-    std::unordered_map<GlobalId, LocalIndex> index_of;
-    index_of.reserve(p.size());
-    for (std::size_t i = 0; i < p.size(); ++i) index_of.emplace(p.global_id[i], static_cast<LocalIndex>(i));
     for (std::size_t k = 0; k < n(); ++k) {
-      const auto it = index_of.find(gid[k]);
-      if (it == index_of.end()) throw std::logic_error("SolidSolver: a solid particle disappeared from the particle set");
-      pid[k] = it->second;
+      pid[k] = p.local_index(gid[k]);
+      if (pid[k] < 0) throw std::logic_error("SolidSolver: a solid particle disappeared from the particle set");
     }
   }
   for (std::size_t k = 0; k < n(); ++k) {
