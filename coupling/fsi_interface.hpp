@@ -23,14 +23,12 @@
 // 3.0 P dp per particle instead of P dp (n0 / n~ = 6.54 / 2.12 at re = 2.1 dp); see docs/validation.md.
 //
 // Stability of the explicit (weak) coupling: the fluid's pressure answers the solid's displacement like a
-// stiff spring one step late, which pumps energy into the solid (measured: interface work 30 J/m by 0.7 s in
-// the dam break on the plate, whose physical energy is ~1 J/m). Two generic measures cut it tenfold
-// (docs/validation.md, ## Coupling): the fluid sees the solid at mid-step (midstep_predictor) and the
-// solid's own deformation does not enter the fluid's density source (freeze_solid_density). What was left
-// went into the solid's particle-scale modes (85-90 % of the plate's kinetic energy beyond a smooth
-// quartic velocity field, 10 J/m by 1.1 s, particles at 5 m/s): the run loop gives the solid's bonds a
-// Kelvin-Voigt damping (CouplingSpec::solid_damping, SolidSolver::set_damping) that damps those modes and
-// leaves the first bending mode alone; with it the work stays below 1 J/m to 2 s. Clamped particles get no
+// stiff spring one step late, which pumps energy into the solid. Two generic measures reduce it: the fluid
+// sees the solid at mid-step (midstep_predictor) and the solid's own deformation does not enter the fluid's
+// density source (freeze_solid_density). What is left goes into the solid's particle-scale modes: the run
+// loop gives the solid's bonds a Kelvin-Voigt damping (CouplingSpec::solid_damping,
+// SolidSolver::set_damping) that damps those modes and leaves the first bending mode alone. The measured
+// interface work with and without each measure is in docs/validation.md (## Coupling). Clamped particles get no
 // load and are no j* in eq. 50 (exclude_clamped). load_relaxation (default 1, off) under-relaxes the load.
 #pragma once
 
@@ -66,8 +64,8 @@ struct FsiOptions {
   std::string offset_field = "fsi_density_offset";
   /// Clamped solid particles (e.g. the foot of a plate embedded in the floor) are wall-like: they get no
   /// load and are left out of the j* of eq. 50 (their PPE pressure is spurious where their lattice and the
-  /// floor's overlap: 8-17 kPa measured). They stay PPE rows of the fluid like walls: as dummies the fluid
-  /// leaked through the floor at the plate's foot (2-8 particles below the floor at any time, measured).
+  /// floor's overlap). They stay PPE rows of the fluid like walls: as dummies the fluid leaks through the
+  /// floor at the plate's foot (docs/validation.md, ## Coupling).
   bool exclude_clamped = true;
   /// Under-relaxation of the load in time: F_applied = a F_eq.50 + (1 - a) F_applied(previous step).
   Real load_relaxation = 1.0;

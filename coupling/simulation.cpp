@@ -328,7 +328,7 @@ class RunLoop {
   }
 
   /// Keep a copy of the particle set as the frame written if a later step fails. The copy costs about as much
-  /// as a cheap solid step (17 % of a lamb_a step), so it is taken every k steps, with k chosen from the
+  /// as a cheap solid step (docs/performance.md, ## Lamb's problem), so it is taken every k steps, with k from the
   /// measured copy and step times such that the copies take at most ~2 % of the run; the frame is then at
   /// most k steps older than the failing step (its time is in the message).
   void keep_last_good() {

@@ -87,7 +87,6 @@ struct FluidSolver::Impl {
     ps.tolerance = spec.fluid.tolerance;
     ps.max_iterations = spec.fluid.max_iterations;
     ps.rebuild_every = spec.fluid.preconditioner_rebuild_every;
-    ps.muelu_rebuild_every = opt.muelu_rebuild_every;
     solver = make_pressure_solver(ps, comm);
     tolerance = ps.tolerance;
     density_tolerance = spec.fluid.density_tolerance;

@@ -39,9 +39,6 @@ struct FluidOptions {
   Real collision_distance = 0.5;   ///< collision model: pairs closer than this x dp (mps-practice notes)
   Real restitution = 0.2;          ///< collision model: restitution coefficient
   int reorder_every = 20;          ///< cell-order the particles every N steps (0: never; skipped with solids)
-  /// MueLu: full hierarchy setup every N steps, reuse (tP) in between. Reuse needs an unchanged matrix
-  /// graph, which moving particles do not give: keep 1 (measured: MueLu throws "new entry into a static graph").
-  int muelu_rebuild_every = 1;
   Real viscous_number = 0.2;       ///< viscous limit dt <= viscous_number dp^2 / nu
   /// Solid particles take part as boundary particles with prescribed position and velocity (PPE rows,
   /// number density, collisions), like wall particles. Off: solids are ignored by the fluid.

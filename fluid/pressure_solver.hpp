@@ -37,8 +37,6 @@ struct PressureSolverSettings {
   /// the iterations of the first solve after the last setup (e.g. after the particles were reordered).
   /// 0: off.
   Real rebuild_growth = 1.5;
-  /// Old name of rebuild_every for MueLu (the larger of the two is used).
-  int muelu_rebuild_every = 1;
   /// Expert (benchmarks): extra parameters for the preconditioner's package, by their MueLu / Ifpack2
   /// names, e.g. {"relaxation: sweeps", "2"}, "list/name" for a sublist; values are read as bool, integer,
   /// number or string and override the built-in choices. Keys "belos: NAME" go to Belos ("belos: manager"

@@ -203,7 +203,6 @@ class TrilinosPressureSolver final : public PressureSolver {
                                   "' (expected muelu, chebyshev, ilu, jacobi, sgs, ssor or none)");
     if (s.preconditioner == "ssor") omega_ = 1.4;  // measured best on the dam break (docs/performance.md)
     rebuild_every_ = std::max(1, s.rebuild_every);
-    if (s.preconditioner == "muelu") rebuild_every_ = std::max(rebuild_every_, s.muelu_rebuild_every);
     for (const auto& [key, value] : s.parameters) {
       if (key == "sgs: omega")
         omega_ = std::stod(value);

@@ -130,8 +130,8 @@ struct FluidNumerics {
   Real tolerance = 1e-8;                  ///< relative residual of the pressure solve
   /// Absolute stop of the pressure solve tied to the incompressibility error: the solve also stops when
   /// the RMS over the rows of r_i dt^2 / rho (the density error, as a fraction of n0, that the residual r
-  /// leaves after the correction) is below this. 0: off (relative tolerance only). 1e-6 halves the
-  /// iterations of the dam break and changes its front and pressures by < 0.3 % (docs/performance.md).
+  /// leaves after the correction) is below this. 0: off (relative tolerance only). Its effect on the
+  /// iterations and the results: docs/performance.md (## Fluid).
   Real density_tolerance = 1e-6;
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between

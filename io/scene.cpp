@@ -104,7 +104,7 @@ std::size_t estimate_memory_bytes(const CaseSpec& spec, const Scene& scene) {
   const std::size_t matrix = nnz * (sizeof(Real) + sizeof(int));
   // The solid (solid/solid_solver.cpp): per particle about 300 bytes of state and contact scratch, per bond
   // (each pair once, half the neighbours within solid.re) about 85 bytes: reference vector, weights, index,
-  // volumetric-strain weights, intact flag, scratch. Measured: lamb_a (335,400 particles) peaks at 388 MiB.
+  // volumetric-strain weights, intact flag, scratch (checked against lamb_a: docs/performance.md, ## Lamb's problem).
   const std::size_t n_solid = p.n_of_kind(ParticleKind::solid);
   const auto bonds = lattice_constants(spec.dp, spec.solid.re * spec.dp);
   const std::size_t solid = n_solid * (300 + static_cast<std::size_t>(bonds.n_neighbours) / 2 * 85);
