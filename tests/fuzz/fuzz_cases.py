@@ -160,7 +160,7 @@ KNOWN_KEYS = ["dp", "time.end", "time.dt", "time.cfl", "time.dt_max", "gravity",
               "tank_motion.type", "tank_motion.pivot", "tank_motion.amplitude_deg", "tank_motion.period",
               "tank_motion.file", "probes", "walls", "bodies", "materials", "solid_loads", "sources"]
 # Keys whose large values make the program build big lattices (memory, time).
-SIZE_KEYS = {"dp": [Raw("1e-5"), Raw("2e-6"), Raw("1e-7"), Raw("1e-9"), Raw("1e-300"), Raw("3e-5"), Raw("1e-4")],
+SIZE_KEYS = {"dp": [Raw("1e-5"), Raw("2e-5"), Raw("2e-6"), Raw("1e-7"), Raw("1e-9"), Raw("1e-300"), Raw("3e-5"), Raw("1e-4")],
              "fluid.re_laplacian": [Raw("1e300"), Raw("1e9"), Raw("1e6"), Raw("1e4"), Raw("1000"), Raw("1.7e308")],
              "fluid.re_gradient": [Raw("1e300"), Raw("1e9"), Raw("1e6"), Raw("1e4")],
              "solid.re": [Raw("1e300"), Raw("1e9"), Raw("1e6"), Raw("1e4"), Raw("1000")],
@@ -212,9 +212,19 @@ def m_known_key_bad_value(ctx, tree, rng):
     return "%s set to %s" % (key, describe(value)), None
 
 
+def next_of(ctx, name, options):
+    """The options in turn (every one is used once before any is used twice); build() is sequential, so the
+    choice is reproducible."""
+    n = ctx.setdefault(name, 0)
+    ctx[name] = n + 1
+    return options[n % len(options)]
+
+
+SIZE_PAIRS = [(key, value) for key in sorted(SIZE_KEYS) for value in SIZE_KEYS[key]]
+
+
 def m_size_key(ctx, tree, rng):
-    key = rng.choice(sorted(SIZE_KEYS))
-    value = rng.choice(SIZE_KEYS[key])
+    key, value = next_of(ctx, "size_pairs", SIZE_PAIRS)
     set_dotted(tree, key, value)
     return "%s set to %s (large lattice / many steps)" % (key, describe(value)), None
 
@@ -298,8 +308,10 @@ def m_duplicate_key(ctx, tree, rng):
 
 
 def m_special_file(ctx, tree, rng):
-    name, path = rng.choice(sorted(ctx["special"].items()))
-    if rng.random() < 0.5:
+    # Every special file for both file keys in turn.
+    pairs = [(key, item) for item in sorted(ctx["special"].items()) for key in ("tank_motion", "wavelet")]
+    key, (name, path) = next_of(ctx, "special_pairs", pairs)
+    if key == "tank_motion":
         tree["tank_motion"] = {"type": "table", "pivot": [0, 0], "file": path}
         if not tree.get("walls"):
             tree["walls"] = [{"name": "tank_fuzz", "type": "box",
@@ -499,6 +511,8 @@ MUTATIONS = [
     ("known_key_bad_value", m_known_key_bad_value),
     ("special_file", m_special_file),
     ("delete_key", m_delete_key),
+    ("size_key", m_size_key),
+    ("special_file", m_special_file),
 ]
 
 
