@@ -17,6 +17,7 @@
 #include "solid/solid_solver.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -102,6 +103,7 @@ class RunLoop {
       coupling_->initialize();
       if (rank_ == 0) coupling_->open_csv(settings.output_dir + "/interface.csv", appends("interface.csv"));
     }
+    check_output_fields();
     writer_.set_fields(spec.output.fields);
     summary_.pvd_path = writer_.pvd_path();
     if (rank_ == 0) {
@@ -268,6 +270,20 @@ class RunLoop {
                                        spec_.domain.hi[1]));
       }
     }
+  }
+
+  /// output.fields names fields of this case: the solvers registered theirs above (a case without a solid has
+  /// no von_mises, for example), so the names are checked here rather than when the case is read.
+  void check_output_fields() const {
+    std::vector<std::string> known;
+    for (const auto& kv : p_.scalar_fields()) known.push_back(kv.first);
+    for (const auto& kv : p_.vector_fields()) known.push_back(kv.first);
+    for (const auto& name : spec_.output.fields)
+      if (!p_.has_scalar_field(name) && !p_.has_vector_field(name))
+        throw CaseError(fmt::format("{}: output.fields: '{}' is not a field of this case; expected some of: {} (the "
+                                    "arrays velocity, kind, body, material, clamped and global_id are always written)",
+                                    spec_.file, name.size() > 64 ? name.substr(0, 64) + "..." : name,
+                                    fmt::join(known, ", ")));
   }
 
   /// Fluid particles of each body (by body index).

@@ -191,9 +191,9 @@ VtkSeriesWriter::VtkSeriesWriter(std::string directory, std::string basename)
 
 void VtkSeriesWriter::set_fields(std::vector<std::string> fields) {
   std::vector<std::string> unique;
-  for (auto& f : fields) {
-    if (std::find(unique.begin(), unique.end(), f) == unique.end()) unique.push_back(std::move(f));
-  }
+  std::set<std::string> seen;
+  for (auto& f : fields)
+    if (seen.insert(f).second) unique.push_back(std::move(f));
   fields_ = std::move(unique);
 }
 

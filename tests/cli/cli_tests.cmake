@@ -61,6 +61,8 @@ mpsfsi_cli_test(checkpoint_every_nan 2 "--checkpoint-every.*'nan': expected a po
   run ${db} --output ${run_dir}/ck_nan --checkpoint-every nan)
 mpsfsi_cli_test(checkpoint_every_zero 2 "--checkpoint-every.*'0': expected a positive, finite number"
   run ${db} --output ${run_dir}/ck_zero --checkpoint-every 0)
+mpsfsi_cli_test(unknown_output_field 2 "output.fields: 'nosuch' is not a field of this case; expected some of: free_surface, pressure"
+  run ${db} --output ${run_dir}/unknown_field --overwrite --end-time 0.01 --set "output.fields=[pressure,nosuch]")
 # Output folders that cannot be one: exit 2 naming --output, not a raw filesystem error.
 mpsfsi_cli_test(output_is_a_file 2 "--output /dev/null: exists and is not a folder" run ${db} --output /dev/null --end-time 0.01)
 mpsfsi_cli_test(output_under_a_file 2 "--output .*dam_break.yaml/sub: cannot create the folder"
