@@ -80,6 +80,8 @@ struct TankMotionSpec {
   Real amplitude = 0;           ///< sine_roll: amplitude [rad] (case file in degrees)
   Real period = 1;              ///< sine_roll: period [s]
   std::string file;             ///< table: CSV of time [s], angle [deg], resolved relative to the case file
+  std::vector<Real> time;       ///< table: the rows read from `file` when the case was parsed, times [s] ...
+  std::vector<Real> angle;      ///< ... and angles [rad]
 };
 
 enum class ProbeType { pressure, surge_front, column_height, displacement };

@@ -10,12 +10,15 @@
 // follow the reading.
 #include "io/case.hpp"
 
+#include "core/tank_motion.hpp"
+
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -54,6 +57,8 @@ namespace fs = std::filesystem;
 /// Largest number of lattice cells along one side of a rectangle, and of particles in all bodies.
 constexpr Real max_cells_per_side = 1e6;
 constexpr Real max_particles = 1e9;
+/// Largest case file read (the shipped ones have a few KiB).
+constexpr std::uintmax_t max_case_bytes = 16u << 20;
 
 // ---------------------------------------------------------------------------------------------
 // Small string helpers.
@@ -737,6 +742,21 @@ void check_body_materials(const Source& src, const CaseSpec& spec, const Geometr
   }
 }
 
+/// A table file named by `f` (the path as resolved), read by read_time_table (core/tank_motion.hpp), the one
+/// reader of the case's tables; its problems become "location: key = value: <file:line: problem>".
+TimeTable read_table(const Source& src, const Field& f, const fs::path& path, const TimeTableColumn& column) {
+  try {
+    return read_time_table(path.string(), column);
+  } catch (const TableError& e) {
+    src.fail(f, fmt::format("{} = {}: {}", f.path, show(f.node), e.what()));
+  }
+}
+
+/// A file named in the case: an absolute path, or relative to the case file's directory.
+fs::path resolve(const fs::path& base_dir, const std::string& file) {
+  return fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
+}
+
 void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
   const Source& src = r.source();
   TankMotionSpec& m = spec.tank_motion;
@@ -750,13 +770,12 @@ void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
     m.type = TankMotionType::table;
     m.pivot = r.vec("pivot", point_form + " (centre of the roll)");
     const std::string file = r.text("file", "the path of a CSV file of time [s], angle [deg], relative to the case file");
-    const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec))
-      src.fail(r.at("file"), fmt::format("tank_motion.file = {}: no such file '{}'; expected a CSV file of time [s], "
-                                         "angle [deg] (relative to the case file)",
-                                         file, path.string()));
+    const fs::path path = resolve(base_dir, file);
     m.file = path.string();
+    TimeTable table = read_table(src, r.at("file"), path, angle_table_column());
+    m.time = std::move(table.time);
+    m.angle = std::move(table.value);
+    for (auto& a : m.angle) a *= pi / 180;
   }
   r.finish();
   if (m.type != TankMotionType::none && spec.walls.empty())
@@ -881,54 +900,16 @@ void read_solid_loads(MapReader& top, CaseSpec& spec) {
   }
 }
 
-/// A wavelet table: CSV (or whitespace-separated) rows of time [s], value; '#' comments, empty lines
-/// and one header line before the data are skipped. At least two rows, times strictly increasing.
-void read_wavelet_table(const Source& src, const Field& f, const fs::path& path, WaveletSpec& w) {
-  std::ifstream in(path);
-  if (!in) src.fail(f, fmt::format("{} = {}: cannot read '{}'; expected a CSV file of time [s], value", f.path,
-                                   f.node.Scalar(), path.string()));
-  std::string line;
-  int line_no = 0;
-  bool header_allowed = true;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const std::string t = trim(line.substr(0, line.find('#')));
-    if (t.empty() || t == "\r") continue;
-    std::string row = t;
-    std::replace(row.begin(), row.end(), ',', ' ');
-    std::istringstream ls(row);
-    std::string a, b, extra;
-    ls >> a >> b;
-    const auto time = parse_real(a), value = parse_real(trim(b));
-    const bool more = static_cast<bool>(ls >> extra) && !trim(extra).empty();
-    if (!time || !value || more) {
-      if (header_allowed && !time) {
-        header_allowed = false;
-        continue;
-      }
-      src.fail(f, fmt::format("{} = {}: {}:{}: '{}': expected a row of two numbers: time [s], value", f.path,
-                              f.node.Scalar(), path.string(), line_no, t));
-    }
-    header_allowed = false;
-    if (!w.time.empty() && !(*time > w.time.back()))
-      src.fail(f, fmt::format("{} = {}: {}:{}: time {:g} s: expected times that increase strictly", f.path,
-                              f.node.Scalar(), path.string(), line_no, *time));
-    w.time.push_back(*time);
-    w.value.push_back(*value);
-  }
-  if (w.time.size() < 2)
-    src.fail(f, fmt::format("{} = {}: '{}' has {} row(s); expected at least two rows of time [s], value", f.path,
-                            f.node.Scalar(), path.string(), w.time.size()));
-}
-
 void read_wavelet(MapReader r, const fs::path& base_dir, WaveletSpec& w) {
   const std::string type = r.choice("type", {"gaussian_derivative", "ricker", "gaussian", "table"});
   if (type == "table") {
     w.type = WaveletType::table;
     const std::string file = r.text("file", "the path of a CSV file of time [s], value, relative to the case file");
-    const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
+    const fs::path path = resolve(base_dir, file);
     w.file = path.string();
-    read_wavelet_table(r.source(), r.at("file"), path, w);
+    TimeTable table = read_table(r.source(), r.at("file"), path, TimeTableColumn{});
+    w.time = std::move(table.time);
+    w.value = std::move(table.value);
   } else {
     w.type = type == "gaussian_derivative" ? WaveletType::gaussian_derivative
              : type == "ricker"            ? WaveletType::ricker
@@ -1230,6 +1211,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
   std::error_code ec;
   if (!fs::is_regular_file(path, ec))
     throw CaseError(fmt::format("{}: cannot read the case file: {}", path, fs::exists(path, ec) ? "not a regular file" : "no such file"));
+  const auto size = fs::file_size(path, ec);
+  if (!ec && size > max_case_bytes)
+    throw CaseError(fmt::format("{}: cannot read the case file: it has {} bytes; expected a case file of at most {} MiB",
+                                path, size, max_case_bytes >> 20));
   std::ifstream in(path, std::ios::binary);
   if (!in.is_open()) throw CaseError(fmt::format("{}: cannot read the case file: cannot open it", path));
   std::ostringstream text;

@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/stat.h>
+
 using namespace mpsfsi;
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
@@ -524,7 +526,7 @@ TEST(CaseFile, WaveletTableIsReadRelativeToTheCaseFile) {
   fs::remove_all(dir);
   // parse_case resolves relative to the current directory, where there is no stf.csv.
   EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "wavelet: {type: table") +
-                                        " sources[0].wavelet.file = stf.csv: cannot read './stf.csv'; expected a CSV file"));
+                                        " sources[0].wavelet.file = stf.csv: no such file './stf.csv'; expected a CSV file"));
 }
 
 TEST(CaseFileErrors, Sources) {
@@ -823,4 +825,110 @@ TEST(CaseFile, LateralWallFriction) {
   EXPECT_THAT(error_of(minimal_case + std::string("fluid: {lateral_walls: {gap: 0.01}}\n")),
               HasSubstr("missing key 'frequency' in fluid.lateral_walls; expected: fluid.lateral_walls.frequency, a "
                         "positive number [Hz]"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tables, sizes and bounds (issue 13): input that used to block, run out of memory, take minutes or reach
+// the run before it failed is refused when the case is read, with the key and the expected form.
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A folder of its own under the system's temporary folder, removed at the end of the test.
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name) : path(fs::temp_directory_path() / name) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+/// The valid case with a wavelet table `file`, written to dir/case.yaml.
+std::string wavelet_case(const fs::path& dir, const std::string& file) {
+  const std::string text = valid_with("wavelet: {type: ricker, frequency: 50, delay: 0.03}", "wavelet: {type: table, file: " + file + "}");
+  std::ofstream(dir / "case.yaml") << text;
+  return (dir / "case.yaml").string();
+}
+
+/// The valid case with a tank-motion table `file`, written to dir/case.yaml.
+std::string table_motion_case(const fs::path& dir, const std::string& file) {
+  const std::string text = valid_with("  type: sine_roll\n  pivot: [0.3, 0]\n  amplitude_deg: 4\n  period: 1.2\n",
+                                      "  type: table\n  pivot: [0.3, 0]\n  file: " + file + "\n");
+  std::ofstream(dir / "case.yaml") << text;
+  return (dir / "case.yaml").string();
+}
+
+std::string load_error(const std::string& path, const std::vector<std::string>& overrides = {}) {
+  try {
+    load_case(path, overrides);
+  } catch (const CaseError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+// A FIFO used to block `check` forever and /dev/zero to read until memory ran out; a huge file was read whole.
+TEST(CaseFileTables, OnlyRegularFilesOfBoundedSize) {
+  const TempDir dir("mpsfsi_test_case_file_special");
+  const fs::path fifo = dir.path / "stf.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const auto& make : {wavelet_case, table_motion_case}) {
+    const std::string key = make == wavelet_case ? "sources[0].wavelet.file" : "tank_motion.file";
+    EXPECT_THAT(load_error(make(dir.path, fifo.string())),
+                HasSubstr(key + " = " + fifo.string() + ": '" + fifo.string() + "' is not a regular file (a FIFO); expected a CSV file of time [s]"));
+    EXPECT_THAT(load_error(make(dir.path, "/dev/zero")),
+                HasSubstr(key + " = /dev/zero: '/dev/zero' is not a regular file (a device, socket or other special file)"));
+    EXPECT_THAT(load_error(make(dir.path, dir.path.string())), HasSubstr("is not a regular file (a directory)"));
+  }
+  // Over 16 MiB (a sparse file: nothing is written).
+  std::ofstream(dir.path / "big.csv") << "0,0\n1,1\n";
+  fs::resize_file(dir.path / "big.csv", (16u << 20) + 1);
+  EXPECT_THAT(load_error(wavelet_case(dir.path, "big.csv")),
+              HasSubstr("sources[0].wavelet.file = big.csv: '" + (dir.path / "big.csv").string() + "' has 16777217 bytes; expected a table file of at most 16 MiB"));
+  // More than a million rows (within 16 MiB).
+  {
+    std::ofstream many(dir.path / "many.csv");
+    for (int k = 0; k <= 1000000; ++k) many << k << ",0\n";
+  }
+  EXPECT_THAT(load_error(table_motion_case(dir.path, "many.csv")),
+              HasSubstr((dir.path / "many.csv").string() + ":1000001: more than 1000000 rows; expected at most 1000000 rows of time [s], angle [deg]"));
+  // The case file itself.
+  std::ofstream(dir.path / "huge.yaml") << "name: x\n";
+  fs::resize_file(dir.path / "huge.yaml", (16u << 20) + 1);
+  EXPECT_THAT(load_error((dir.path / "huge.yaml").string()), HasSubstr("cannot read the case file: it has 16777217 bytes; expected a case file of at most 16 MiB"));
+  EXPECT_THAT(load_error(fifo.string()), HasSubstr("cannot read the case file: not a regular file"));
+}
+
+// The tank-motion table was read only by the run, which skipped rows it could not read and then said "needs
+// at least two rows" of a three-row file (exit 1). Now the case reader reads it, with the wavelets' reader.
+TEST(CaseFileTables, TankMotionTableIsCheckedWhenTheCaseIsRead) {
+  const TempDir dir("mpsfsi_test_case_file_motion");
+  const std::string case_path = table_motion_case(dir.path, "roll.csv");
+  const std::string csv = (dir.path / "roll.csv").string();
+  const auto error = [&](const std::string& rows) {
+    std::ofstream(dir.path / "roll.csv") << rows;
+    return load_error(case_path);
+  };
+  const std::string key = "tank_motion.file = roll.csv: ";
+  EXPECT_THAT(error("0;0\n0.5;1\n1;0\n"), HasSubstr(key + csv + ":2: '0.5;1': expected a row of two numbers: time [s], angle [deg]"));
+  EXPECT_THAT(error("0,0\n1,nan\n2,0\n"), HasSubstr(key + csv + ":2: '1,nan': expected a row of two numbers"));
+  EXPECT_THAT(error("0,0\n1,1\n0.5,2\n"), HasSubstr(key + csv + ":3: time 0.5 s: expected times that increase strictly"));
+  EXPECT_THAT(error("0,0\n"), HasSubstr(key + "'" + csv + "' has 1 row(s); expected at least two rows of time [s], angle [deg]"));
+  EXPECT_THAT(error("0,0\n1,95\n"), HasSubstr(key + csv + ":2: angle [deg] = 95: expected an angle in (-90, 90) degrees"));
+  EXPECT_THAT(error("0,0\n1,2,3\n"), HasSubstr(csv + ":2: '1,2,3': expected a row of two numbers"));
+  std::ofstream(dir.path / "passwd") << "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n";
+  EXPECT_THAT(load_error(table_motion_case(dir.path, "passwd")),
+              HasSubstr("tank_motion.file = passwd: " + (dir.path / "passwd").string() + ":2: 'daemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin': expected a row of two numbers"));
+
+  // A good table is kept in the case (angles in radians): the run uses it and does not read the file again.
+  std::ofstream(dir.path / "roll.csv") << "# roll\ntime, angle\n0, 0\n0.5, 2\n1.0 -4\n";
+  const CaseSpec c = load_case(table_motion_case(dir.path, "roll.csv"));
+  EXPECT_EQ(c.tank_motion.time, (std::vector<Real>{0, 0.5, 1.0}));
+  ASSERT_EQ(c.tank_motion.angle.size(), 3u);
+  EXPECT_NEAR(c.tank_motion.angle[1], 2 * deg, 1e-15);
+  EXPECT_NEAR(c.tank_motion.angle[2], -4 * deg, 1e-15);
 }

@@ -52,3 +52,15 @@ add_test(NAME run_all_shipped_cases
                  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/case_runs -DEND=2e-4
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/all_cases.cmake)
 set_tests_properties(run_all_shipped_cases PROPERTIES LABELS cases TIMEOUT 600)
+
+# Issue 13: input that blocked `check`, ran it out of memory, made it take minutes, hung a run or reached the
+# run before failing there is refused by `check` (exit 2) with the key and the expected form.
+set(lamb ${PROJECT_SOURCE_DIR}/cases/lamb_a.yaml)
+set(measured ${PROJECT_SOURCE_DIR}/cases/sloshing_high_measured.yaml)
+mpsfsi_cli_test(table_from_a_device 2 "sources\\[0\\]\\.wavelet\\.file = /dev/zero: '/dev/zero' is not a regular file"
+  check ${lamb} --set "sources.0.wavelet={type: table, file: /dev/zero}")
+mpsfsi_cli_test(tank_table_from_a_device 2 "tank_motion\\.file = /dev/zero: '/dev/zero' is not a regular file"
+  check ${measured} --set tank_motion.file=/dev/zero)
+mpsfsi_cli_test(tank_table_rows_checked_before_the_run 2
+  "tank_motion\\.file = .*roll_semicolons\\.csv: .*roll_semicolons\\.csv:3: '0\\.5;1': expected a row of two numbers: time \\[s\\], angle \\[deg\\]"
+  run ${measured} --quiet --overwrite --output ${run_dir}/semicolons --end-time 0.01 --set tank_motion.file=${bad}/roll_semicolons.csv)
