@@ -360,9 +360,9 @@ TEST(CaseFileErrors, OutOfRangeValues) {
   EXPECT_THAT(error_of(valid_with("amplitude_deg: 4", "amplitude_deg: 95")),
               HasSubstr("tank_motion.amplitude_deg = 95: expected a number of degrees in (0, 90)"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: 0")),
-              HasSubstr("coupling.subcycles = 0: expected a positive integer or auto"));
+              HasSubstr("coupling.subcycles = 0: expected a positive integer up to 100000 or auto"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: 2.5")),
-              HasSubstr("coupling.subcycles = 2.5: expected a positive integer or auto"));
+              HasSubstr("coupling.subcycles = 2.5: expected a positive integer up to 100000 or auto"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, solid_damping: -1")),
               HasSubstr("coupling.solid_damping = -1: expected a number >= 0"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, load_relaxation: 0")),
@@ -931,4 +931,83 @@ TEST(CaseFileTables, TankMotionTableIsCheckedWhenTheCaseIsRead) {
   ASSERT_EQ(c.tank_motion.angle.size(), 3u);
   EXPECT_NEAR(c.tank_motion.angle[1], 2 * deg, 1e-15);
   EXPECT_NEAR(c.tank_motion.angle[2], -4 * deg, 1e-15);
+}
+
+// --set fluid.re_laplacian=1e6 made `check` run for minutes (about 3e12 neighbours per particle).
+TEST(CaseFileErrors, RadiiAreBounded) {
+  EXPECT_THAT(error_of(valid_text(), {"fluid.re_laplacian=1e6"}),
+              HasSubstr("fluid.re_laplacian = 1e6: about pi re^2 = 3.1e+12 neighbours per particle; expected a number in "
+                        "(1, 10] (effective radius of the Laplacian, in units of dp)"));
+  EXPECT_THAT(error_of(valid_text(), {"fluid.re_gradient=10.5"}), HasSubstr("fluid.re_gradient = 10.5: about pi re^2 = 3.5e+02 neighbours"));
+  EXPECT_THAT(error_of(valid_text(), {"fluid.re_gradient=1"}), HasSubstr("fluid.re_gradient = 1: expected a number in (1, 10]"));
+  EXPECT_THAT(error_of(valid_text(), {"solid.re=40"}), HasSubstr("solid.re = 40: about pi re^2 = 5e+03 neighbours per particle; expected a number in (1, 10] (effective radius of the bonds"));
+  EXPECT_THAT(error_of(valid_text(), {"sources.tap.radius=1"}),
+              HasSubstr("sources[0].radius = 1: 250 dp, about 2e+05 particles in the stencil; expected a radius of at most 10 dp = 0.04 m (dp = 0.004 m)"));
+  EXPECT_THAT(error_of(valid_text(), {"receivers.radius=0.041"}), HasSubstr("receivers.radius = 0.041: 10.2 dp"));
+  EXPECT_EQ(error_of(valid_text(), {"fluid.re_laplacian=10", "solid.re=10", "receivers.radius=0.04"}), "(no error)");
+}
+
+// output.interval = 1e-300 hung a run; so would the same receivers.interval; time steps are bounded too.
+TEST(CaseFileErrors, IntervalsAndTimeStepsAreBounded) {
+  EXPECT_THAT(error_of(valid_text(), {"output.interval=1e-300"}),
+              HasSubstr("output.interval = 1e-300: expected an interval of at least 1e-06 s (at least 1e-09 s, and at most "
+                        "1e+06 frames up to time.end = 1 s) [s]"));
+  EXPECT_THAT(error_of(valid_text(), {"output.interval=1e-25"}), HasSubstr("output.interval = 1e-25: expected an interval of at least 1e-06 s"));
+  EXPECT_THAT(error_of(valid_text(), {"time.end=1e-6", "output.interval=1e-10"}),
+              HasSubstr("output.interval = 1e-10: expected an interval of at least 1e-09 s"));
+  // The default interval (0.01 s) is too short for a very long end time.
+  EXPECT_THAT(error_of(minimal_case, {"time.end=1e5"}),
+              HasSubstr("output.interval = 0.01 (default): expected an interval of at least 0.1 s"));
+  EXPECT_THAT(error_of(valid_text(), {"receivers.interval=1e-300"}),
+              HasSubstr("receivers.interval = 1e-300: expected an interval of at least 1e-06 s (at least 1e-09 s, and at "
+                        "most 1e+06 rows up to time.end = 1 s) [s]"));
+  EXPECT_THAT(error_of(minimal_case, {"time.dt=1e-13"}),
+              HasSubstr("time.dt = 1e-13: expected a time step of at least 5e-10 s (at least 1e-12 s, and at most 1e+09 "
+                        "steps up to time.end = 0.5 s) [s]"));
+  EXPECT_THAT(error_of(valid_text(), {"time.dt_max=1e-300"}), HasSubstr("time.dt_max = 1e-300: expected a time step of at least 1e-12 s"));
+  EXPECT_THAT(error_of(valid_text(), {"solid.dt=1e-15"}), HasSubstr("solid.dt = 1e-15: expected a time step of at least 1e-09 s"));
+  EXPECT_THAT(error_of(valid_text(), {"coupling.subcycles=100001"}),
+              HasSubstr("coupling.subcycles = 100001: expected a positive integer up to 100000 or auto"));
+  EXPECT_EQ(error_of(valid_text(), {"coupling.subcycles=100000", "output.interval=1e-6", "receivers.interval=1e-6"}), "(no error)");
+}
+
+// gravity: [1e300, 1e300] and other huge numbers overflowed in the run.
+TEST(CaseFileErrors, MagnitudesAreBounded) {
+  EXPECT_THAT(error_of(valid_text(), {"gravity=[1e300, 1e300]"}),
+              HasSubstr("gravity = [1e300, 1e300]: expected a vector [gx, gy] in m/s2 of magnitude at most 10000 m/s2 (1000 g)"));
+  EXPECT_THAT(error_of(valid_text(), {"bodies.column.velocity=[0, -2e4]"}),
+              HasSubstr("bodies[0].velocity = [0, -2e4]: expected an initial velocity [vx, vy] in m/s of magnitude at most 10000 m/s"));
+  EXPECT_THAT(error_of(valid_text(), {"bodies.plate.angular_velocity=1e300"}),
+              HasSubstr("bodies[1].angular_velocity = 1e300: expected a number in [-10000, 10000] (initial angular velocity) [rad/s]"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.water.rho=1e300"}), HasSubstr("materials.water.rho = 1e300: expected a number in [0.001, 100000] (density) [kg/m3]"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.water.c=1e-300"}), HasSubstr("materials.water.c = 1e-300: expected a number in [0.001, 100000] (sound speed"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.water.nu=1e300"}), HasSubstr("materials.water.nu = 1e300: expected a number in [0, 10000] (kinematic viscosity)"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.rubber.E=1e300"}), HasSubstr("materials.rubber.E = 1e300: expected a number in [0.001, 1e+13] (Young's modulus) [Pa]"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.rubber.rho=1e-300"}), HasSubstr("materials.rubber.rho = 1e-300: expected a number in [0.001, 100000]"));
+  EXPECT_THAT(error_of(valid_with("E: 1.2e7, nu: 0.4", "vp: 1e300, vs: 50")), HasSubstr("materials.rubber.vp = 1e300: expected a number in [0.001, 100000] (P-wave speed"));
+  EXPECT_THAT(error_of(valid_text(), {"tank_motion.period=1e-300"}), HasSubstr("tank_motion.period = 1e-300: expected a roll period of at least 0.001 s"));
+  EXPECT_THAT(error_of(valid_text(), {"solid_loads.push.peak=1e300"}), HasSubstr("solid_loads[0].peak = 1e300: expected a number in [-1e+13, 1e+13] (peak pressure) [Pa]"));
+  EXPECT_THAT(error_of(valid_text(), {"sources.tap.amplitude=-1e300"}), HasSubstr("sources[0].amplitude = -1e300: expected a number in [-1e+13, 1e+13] (line force F0) [N/m]"));
+  EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 1e-300}")),
+              HasSubstr("fluid.lateral_walls.gap = 1e-300: expected a gap of at least 1e-06 m"));
+}
+
+// An invalid UTF-8 description went into case.resolved.yaml, which YAML readers then refused; a 300-character
+// name made creating the output folder fail with a raw filesystem error.
+TEST(CaseFileErrors, TextIsUtf8AndNamesAreShort) {
+  EXPECT_THAT(error_of(valid_with("Water column", "Water \xff column")),
+              HasSubstr("description: the text is not valid UTF-8 (byte 0xff at position 7); expected a one-line description "
+                        "of the case, as UTF-8 text"));
+  EXPECT_THAT(error_of(valid_with("Made-up", "Made\xc3-up")), HasSubstr("source: the text is not valid UTF-8 (byte 0xc3 at position 5)"));
+  EXPECT_THAT(error_of(valid_with("Made-up", "Made\xed\xa0\x80-up")), HasSubstr("source: the text is not valid UTF-8"));  // a surrogate
+  EXPECT_THAT(error_of(valid_with("Made-up", "Made\xc0\xaf-up")), HasSubstr("source: the text is not valid UTF-8"));  // overlong '/'
+  EXPECT_THAT(error_of(valid_text(), {"description=caf\xe9"}), HasSubstr("(--set description=caf\xe9): description: the text is not valid UTF-8"));
+  EXPECT_EQ(error_of(valid_with("Water column", "Wasser \xc3\xa4 \xe2\x82\xac \xf0\x9f\x8c\x8a column")), "(no error)");
+
+  const std::string long_name(65, 'a');
+  EXPECT_THAT(error_of(valid_with("name: test_case", "name: " + long_name)),
+              HasSubstr("name = " + long_name.substr(0, 57) + "...: expected the case name: a name of at most 64 letters"));
+  EXPECT_THAT(error_of(valid_with("name: plate", "name: " + long_name)), HasSubstr("bodies[1].name = aaaa"));
+  EXPECT_THAT(error_of(valid_with("water:", long_name + ":")), HasSubstr("material name '" + long_name + "': expected a name of at most 64"));
+  EXPECT_EQ(error_of(valid_with("name: test_case", "name: " + std::string(64, 'a'))), "(no error)");
 }

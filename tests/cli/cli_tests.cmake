@@ -64,3 +64,13 @@ mpsfsi_cli_test(tank_table_from_a_device 2 "tank_motion\\.file = /dev/zero: '/de
 mpsfsi_cli_test(tank_table_rows_checked_before_the_run 2
   "tank_motion\\.file = .*roll_semicolons\\.csv: .*roll_semicolons\\.csv:3: '0\\.5;1': expected a row of two numbers: time \\[s\\], angle \\[deg\\]"
   run ${measured} --quiet --overwrite --output ${run_dir}/semicolons --end-time 0.01 --set tank_motion.file=${bad}/roll_semicolons.csv)
+mpsfsi_cli_test(huge_effective_radius 2
+  "fluid\\.re_laplacian = 1e6: about pi re\\^2 = 3\\.1e\\+12 neighbours per particle; expected a number in \\(1, 10\\]"
+  check ${db} --set fluid.re_laplacian=1e6)
+mpsfsi_cli_test(tiny_output_interval 2 "output\\.interval = 1e-300: expected an interval of at least 1e-06 s"
+  check ${db} --set output.interval=1e-300)
+mpsfsi_cli_test(tiny_time_step 2 "time\\.dt_max = 1e-300: expected a time step of at least 1e-12 s" check ${db} --set time.dt_max=1e-300)
+mpsfsi_cli_test(huge_gravity 2 "gravity = \\[1e300, 1e300\\]: expected a vector \\[gx, gy\\] in m/s2 of magnitude at most 10000"
+  check ${db} --set "gravity=[1e300, 1e300]")
+string(REPEAT "a" 300 long_name)
+mpsfsi_cli_test(long_case_name 2 "name = a+\\.\\.\\.: expected the case name: a name of at most 64 letters" check ${db} --set name=${long_name})
