@@ -137,6 +137,8 @@ struct FluidNumerics {
   Real density_tolerance = 1e-6;
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between
+  /// The largest share of a fluid body's particles that may leave the domain before the run stops (exit 3).
+  Real max_loss = 0.05;
   LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
 };
 
@@ -269,8 +271,9 @@ CaseSpec parse_case(const std::string& yaml_text, const std::string& name,
 const std::vector<std::string>& restart_free_keys();
 /// Numerical controls a restart may change, e.g. to continue with a smaller time step after a run went
 /// unstable: time.cfl, time.dt, time.dt_max, coupling.subcycles, fluid.solver, fluid.preconditioner,
-/// fluid.tolerance, fluid.max_iterations, fluid.preconditioner_rebuild_every, solid.dt, solid.dt_factor. The
-/// continuation then is not the original run's. Every other key must equal the checkpoint's case.
+/// fluid.tolerance, fluid.max_iterations, fluid.preconditioner_rebuild_every, fluid.max_loss, solid.dt,
+/// solid.dt_factor. The continuation then is not the original run's. Every other key must equal the
+/// checkpoint's case.
 const std::vector<std::string>& restart_tunable_keys();
 /// True when `key` (dotted, e.g. "time.cfl" or "bodies[0].name") is one of `roots` or lies below one.
 bool key_under(const std::string& key, const std::vector<std::string>& roots);

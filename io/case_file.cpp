@@ -978,6 +978,9 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidNumeric
   n.preconditioner_rebuild_every =
       r.integer("preconditioner_rebuild_every", n.preconditioner_rebuild_every, [](const long long k) { return k >= 1; },
                 "a positive integer (full preconditioner setup every N steps)");
+  n.max_loss = r.number("max_loss", n.max_loss, in_closed(0, 1),
+                        "a number in [0, 1] (largest share of a fluid body's particles that may leave the domain before "
+                        "the run stops)");
   read_lateral_walls(r.optional_map("lateral_walls", "a map {gap, model: stokes | poiseuille, frequency}"), motion,
                      n.lateral_walls);
   r.finish();
@@ -1413,7 +1416,7 @@ const std::vector<std::string>& restart_tunable_keys() {
   static const std::vector<std::string> keys = {
       "time.cfl",       "time.dt",         "time.dt_max",         "coupling.subcycles",
       "fluid.solver",   "fluid.preconditioner", "fluid.tolerance", "fluid.max_iterations",
-      "fluid.preconditioner_rebuild_every", "solid.dt", "solid.dt_factor"};
+      "fluid.preconditioner_rebuild_every", "fluid.max_loss", "solid.dt", "solid.dt_factor"};
   return keys;
 }
 

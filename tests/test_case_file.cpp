@@ -1011,3 +1011,14 @@ TEST(CaseFileErrors, TextIsUtf8AndNamesAreShort) {
   EXPECT_THAT(error_of(valid_with("water:", long_name + ":")), HasSubstr("material name '" + long_name + "': expected a name of at most 64"));
   EXPECT_EQ(error_of(valid_with("name: test_case", "name: " + std::string(64, 'a'))), "(no error)");
 }
+
+TEST(CaseFile, MaxLoss) {
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name).fluid.max_loss, 0.05);
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name, {"fluid.max_loss=0.2"}).fluid.max_loss, 0.2);
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name, {"fluid.max_loss=0"}).fluid.max_loss, 0.0);
+  EXPECT_THAT(error_of(minimal_case, {"fluid.max_loss=1.5"}),
+              HasSubstr("fluid.max_loss = 1.5: expected a number in [0, 1] (largest share of a fluid body's particles that "
+                        "may leave the domain before the run stops)"));
+  EXPECT_THAT(error_of(minimal_case, {"fluid.max_loss=-0.1"}), HasSubstr("fluid.max_loss = -0.1: expected a number in [0, 1]"));
+  EXPECT_TRUE(key_under("fluid.max_loss", restart_tunable_keys()));
+}
