@@ -2,6 +2,7 @@
 // kind of bad input gives a CaseError naming file, line, key and expected form, --set overrides,
 // and a fuzz test (mutated case files either parse or throw CaseError, nothing else).
 #include "io/case.hpp"
+#include "io/scene.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -1021,4 +1022,59 @@ TEST(CaseFile, MaxLoss) {
                         "may leave the domain before the run stops)"));
   EXPECT_THAT(error_of(minimal_case, {"fluid.max_loss=-0.1"}), HasSubstr("fluid.max_loss = -0.1: expected a number in [0, 1]"));
   EXPECT_TRUE(key_under("fluid.max_loss", restart_tunable_keys()));
+}
+
+// dp 1e-5 for the dam break ended in std::bad_alloc (exit 1): the particle count and the memory are
+// estimated from the rectangles and checked before build_scene allocates.
+TEST(Scene, ParticleCountFromTheRectanglesMatchesTheScene) {
+  const std::string cases = std::string(MPSFSI_TEST_DATA_DIR) + "/../../cases/";
+  for (const std::string name : {"dam_break", "dam_break_obstacle", "hydrostatic", "cantilever", "collision_fracture",
+                                 "sloshing_high", "dam_break_elastic_plate"}) {
+    const CaseSpec spec = load_case(cases + name + ".yaml");
+    const ParticleCounts n = count_particles(spec);
+    const Scene scene = build_scene(spec);
+    const auto& p = scene.particles;
+    EXPECT_EQ(n.fluid, p.n_of_kind(ParticleKind::fluid)) << name;
+    EXPECT_EQ(n.solid, p.n_of_kind(ParticleKind::solid)) << name;
+    // Wall points next to clamped particles embedded in a wall give way (io/scene.cpp): a few fewer.
+    std::size_t clamped = 0;
+    for (const auto& c : scene.counts) clamped += c.n_clamped;
+    EXPECT_GE(n.wall + n.dummy, p.n_of_kind(ParticleKind::wall) + p.n_of_kind(ParticleKind::dummy)) << name;
+    EXPECT_LE(n.wall + n.dummy, p.n_of_kind(ParticleKind::wall) + p.n_of_kind(ParticleKind::dummy) + clamped) << name;
+    if (clamped == 0) {
+      EXPECT_EQ(n.wall, p.n_of_kind(ParticleKind::wall)) << name;
+      EXPECT_EQ(n.dummy, p.n_of_kind(ParticleKind::dummy)) << name;
+      EXPECT_EQ(estimate_memory_bytes(spec, n), estimate_memory_bytes(spec, scene)) << name;
+    }
+  }
+}
+
+TEST(Scene, TooLargeForTheMachineIsRefusedBeforeAllocating) {
+  const std::string dam_break = std::string(MPSFSI_TEST_DATA_DIR) + "/../../cases/dam_break.yaml";
+  const CaseSpec spec = load_case(dam_break, {"dp=1e-5"});
+  try {
+    build_scene(spec);  // would need about 780 GiB
+    FAIL() << "no error";
+  } catch (const CaseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(dam_break + ": dp = 1e-05: the case would have 426845618 particles (426320000 fluid, 0 "
+                                    "solid, 175202 wall, 350416 dummy) and need about "));
+    EXPECT_THAT(e.what(), HasSubstr("available (MemAvailable in /proc/meminfo); expected a case that fits: a larger dp"));
+  }
+  // The same check with a given available memory: the case at its own dp needs about 90 MiB.
+  const CaseSpec normal = load_case(dam_break);
+  EXPECT_NO_THROW(check_scene_size(normal, std::size_t{1} << 30));
+  EXPECT_NO_THROW(check_scene_size(normal, std::nullopt));
+  EXPECT_THROW(check_scene_size(normal, std::size_t{64} << 20), CaseError);
+  // Above the hard bound whatever the memory.
+  CaseSpec huge = normal;
+  huge.dp = 1e-6;
+  EXPECT_THAT([&] {
+    try {
+      check_scene_size(huge, std::nullopt);
+    } catch (const CaseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  }(), HasSubstr("dp = 1e-06: the case would have about 4.26e+10 particles; expected at most 1e+09 (a larger dp)"));
+  EXPECT_TRUE(available_memory_bytes().has_value());
 }

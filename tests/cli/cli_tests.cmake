@@ -67,6 +67,9 @@ mpsfsi_cli_test(tank_table_rows_checked_before_the_run 2
 mpsfsi_cli_test(huge_effective_radius 2
   "fluid\\.re_laplacian = 1e6: about pi re\\^2 = 3\\.1e\\+12 neighbours per particle; expected a number in \\(1, 10\\]"
   check ${db} --set fluid.re_laplacian=1e6)
+mpsfsi_cli_test(dp_too_small_for_the_memory 2
+  "dam_break\\.yaml: dp = 1e-05: the case would have 426845618 particles .* and need about [0-9.]+ GiB of memory, but this machine has"
+  check ${db} --dp 1e-5)
 mpsfsi_cli_test(tiny_output_interval 2 "output\\.interval = 1e-300: expected an interval of at least 1e-06 s"
   check ${db} --set output.interval=1e-300)
 mpsfsi_cli_test(tiny_time_step 2 "time\\.dt_max = 1e-300: expected a time step of at least 1e-12 s" check ${db} --set time.dt_max=1e-300)
