@@ -63,6 +63,11 @@ struct BodySpec {
   Real angular_velocity = 0;        ///< initial angular velocity about the body's centroid [rad/s]
 };
 
+/// The part of a body that is not clamped: a clamp that spans the body's whole width (height) cuts its
+/// height (width); otherwise the whole body counts. Only this part must stay clear of the walls, so a
+/// clamped end may be embedded in a wall (the wall particles there give way, see io/scene.cpp).
+Rect free_part(const BodySpec& b);
+
 enum class WallType { box, block };
 
 struct WallSpec {

@@ -50,6 +50,19 @@ int CaseSpec::solid_material_index(const std::string& name) const {
   return index_by_name(solid_materials, name);
 }
 
+Rect free_part(const BodySpec& b) {
+  Rect r = b.rect;
+  if (!b.clamp) return r;
+  const Rect& c = *b.clamp;
+  for (int a = 0; a < 2; ++a) {
+    const int o = 1 - a;  // the clamp spans axis o fully and cuts along axis a
+    if (c.lo[o] > r.lo[o] || c.hi[o] < r.hi[o]) continue;
+    if (c.lo[a] <= r.lo[a] && c.hi[a] < r.hi[a]) r.lo[a] = std::max(r.lo[a], c.hi[a]);
+    else if (c.hi[a] >= r.hi[a] && c.lo[a] > r.lo[a]) r.hi[a] = std::min(r.hi[a], c.lo[a]);
+  }
+  return r;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -761,22 +774,6 @@ bool inside_box(const Rect& r, const WallSpec& box) {
   Rect bound = box.rect;
   if (box.open_top) bound.hi[1] = std::numeric_limits<Real>::infinity();
   return inside(r, bound);
-}
-
-/// The part of a body that is not clamped: a clamp that spans the body's whole width (height) cuts its
-/// height (width); otherwise the whole body counts. Only this part must stay clear of the walls, so a
-/// clamped end may be embedded in a wall (the wall particles there give way, see io/scene.cpp).
-Rect free_part(const BodySpec& b) {
-  Rect r = b.rect;
-  if (!b.clamp) return r;
-  const Rect& c = *b.clamp;
-  for (int a = 0; a < 2; ++a) {
-    const int o = 1 - a;  // the clamp spans axis o fully and cuts along axis a
-    if (c.lo[o] > r.lo[o] || c.hi[o] < r.hi[o]) continue;
-    if (c.lo[a] <= r.lo[a] && c.hi[a] < r.hi[a]) r.lo[a] = std::max(r.lo[a], c.hi[a]);
-    else if (c.hi[a] >= r.hi[a] && c.lo[a] > r.lo[a]) r.hi[a] = std::min(r.hi[a], c.lo[a]);
-  }
-  return r;
 }
 
 /// Every rectangle is inside the domain and at least one particle (dp/2) thick; bodies do not overlap

@@ -28,7 +28,17 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   Vec centroid = Vec::Zero();
   for (const auto& x : points) centroid += x;
   centroid /= static_cast<Real>(points.size());
-  BodyCount count{b.name, is_solid ? "solid" : "fluid", points.size(), 0, 0, 0};
+  BodyCount count;
+  count.name = b.name;
+  count.kind = is_solid ? "solid" : "fluid";
+  count.n_particles = points.size();
+  // The free length is measured along the axis the clamp cuts (free_part), else along the longer side.
+  const Rect free_rect = free_part(b);
+  int free_axis = b.rect.size()[1] >= b.rect.size()[0] ? 1 : 0;
+  for (int a = 0; a < dim; ++a)
+    if (free_rect.lo[a] != b.rect.lo[a] || free_rect.hi[a] != b.rect.hi[a]) free_axis = a;
+  Vec lo = Vec::Constant(std::numeric_limits<Real>::max()), hi = -lo;
+  Real free_lo = std::numeric_limits<Real>::max(), free_hi = -free_lo;
   for (const auto& x : points) {
     const bool clamp = is_solid && b.clamp && b.clamp->contains(x);
     const Vec r = x - centroid;
@@ -36,6 +46,18 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
     const Vec v = clamp ? Vec::Zero() : Vec(b.velocity + b.angular_velocity * Vec(-r[1], r[0]));
     p.add(x, v, is_solid ? ParticleKind::solid : ParticleKind::fluid, body_index, material, clamp);
     count.n_clamped += clamp;
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+    if (!clamp) free_lo = std::min(free_lo, x[free_axis]), free_hi = std::max(free_hi, x[free_axis]);
+  }
+  const Vec half = Vec::Constant(0.5 * spec.dp);
+  count.extent = {lo - half, hi + half};
+  count.extent_difference = std::max((count.extent.lo - b.rect.lo).cwiseAbs().maxCoeff(),
+                                     (count.extent.hi - b.rect.hi).cwiseAbs().maxCoeff());
+  if (is_solid && b.clamp) {
+    count.free_axis = free_axis;
+    count.free_length = free_hi >= free_lo ? free_hi - free_lo + spec.dp : 0;
+    count.file_free_length = free_rect.size()[free_axis];
   }
   scene.counts.push_back(count);
 }
@@ -60,7 +82,10 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, Scene& scene) {
   std::vector<WallPoint> points;
   for (const auto& pt : all_points)
     if (clamped.empty() || !taken_by_clamp(p, clamped, pt.x, spec.dp)) points.push_back(pt);
-  BodyCount count{w.name, "wall", points.size(), 0, 0, 0};
+  BodyCount count;
+  count.name = w.name;
+  count.kind = "wall";
+  count.n_particles = points.size();
   for (const auto& pt : points) {
     p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
     (pt.is_wall ? count.n_wall : count.n_dummy) += 1;

@@ -20,6 +20,16 @@ struct BodyCount {
   std::size_t n_wall = 0;    ///< walls: wall-layer particles
   std::size_t n_dummy = 0;   ///< walls: dummy-layer particles
   std::size_t n_clamped = 0; ///< solids: clamped particles
+  /// Bodies: the region the particles represent, their bounding box widened by dp/2 on each side (the
+  /// file's rectangle rounded to whole lattice cells).
+  Rect extent;
+  /// Bodies: the largest distance between a side of `extent` and the same side of the file's rectangle [m].
+  Real extent_difference = 0;
+  /// Clamped solids: the extent of the unclamped particles (+ dp/2 at each end) along the clamp direction
+  /// `free_axis` (0: x, 1: y) [m], and the same length in the file (free_part of the rectangle).
+  std::optional<Real> free_length;
+  int free_axis = 1;
+  Real file_free_length = 0;
 };
 
 struct Scene {

@@ -1078,3 +1078,24 @@ TEST(Scene, TooLargeForTheMachineIsRefusedBeforeAllocating) {
   }(), HasSubstr("dp = 1e-06: the case would have about 4.26e+10 particles; expected at most 1e+09 (a larger dp)"));
   EXPECT_TRUE(available_memory_bytes().has_value());
 }
+
+// A 0.16 m body came out 0.16025 m: build_scene gives the extent the particles represent, and for clamped
+// solids the free length, which `check` prints (and warns about beyond dp/4).
+TEST(Scene, ExtentsAndFreeLength) {
+  const CaseSpec spec = parse_case(valid_text(), file_name, {"bodies.column.rectangle={min: [0, 0], max: [0.1625, 0.4]}"});
+  const Scene scene = build_scene(spec);
+  const BodyCount& column = scene.counts[0];
+  EXPECT_NEAR(column.extent.lo[0], 0, 1e-12);
+  EXPECT_NEAR(column.extent.hi[0], 0.164, 1e-12);  // round(0.1625 / 0.004) = 41 particles
+  EXPECT_NEAR(column.extent.hi[1], 0.4, 1e-12);
+  EXPECT_NEAR(column.extent_difference, 0.0015, 1e-12);
+  EXPECT_FALSE(column.free_length);
+  // The plate: 0.012 x 0.18 m, clamped over its lowest 0.012 m: free length 0.168 m along y.
+  const BodyCount& plate = scene.counts[1];
+  EXPECT_NEAR(plate.extent_difference, 0, 1e-12);
+  ASSERT_TRUE(plate.free_length);
+  EXPECT_EQ(plate.free_axis, 1);
+  EXPECT_NEAR(*plate.free_length, 0.168, 1e-12);
+  EXPECT_NEAR(plate.file_free_length, 0.168, 1e-12);
+  EXPECT_EQ(scene.counts[2].kind, "wall");
+}
