@@ -211,7 +211,7 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_DOUBLE_EQ(c.coupling.solid_damping, 0.5);
   EXPECT_DOUBLE_EQ(c.coupling.load_relaxation, 1.0);
   EXPECT_EQ(c.fluid.solver, "cg");
-  EXPECT_EQ(c.fluid.preconditioner, "muelu");
+  EXPECT_EQ(c.fluid.preconditioner, "ssor");
   EXPECT_EQ(c.fluid.preconditioner_rebuild_every, 1);
   EXPECT_DOUBLE_EQ(c.fluid.density_tolerance, 1e-6);
   EXPECT_DOUBLE_EQ(c.fluid.re_laplacian, 4.0);
