@@ -15,6 +15,7 @@
 
 #include <mpi.h>
 
+#include <climits>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -33,7 +34,12 @@ std::vector<std::string> RunOptions::all_overrides() const {
 
 int command_check(const RunOptions& opts) {
   const CaseSpec spec = load_case(opts.case_file, opts.all_overrides());
-  const Scene scene = build_scene(spec);
+  // Under mpirun every rank checks: all must take the same decision on the memory, so they compare the case
+  // with the smallest MemAvailable any of them read (otherwise one rank could stop and the others go on).
+  unsigned long long available = available_memory_bytes().value_or(ULLONG_MAX);
+  MPI_Allreduce(MPI_IN_PLACE, &available, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
+  const Scene scene = build_scene(spec, available == ULLONG_MAX ? std::nullopt
+                                                                : std::optional<std::size_t>(static_cast<std::size_t>(available)));
   const auto& p = scene.particles;
   fmt::print("case {} ({}): dp = {:g} m, end time {:g} s\n", spec.name, spec.file, spec.dp, spec.time.end);
   fmt::print("{:<20} {:<6} {:>10} {:>10} {:>10} {:>10}\n", "body", "kind", "particles", "wall", "dummy", "clamped");

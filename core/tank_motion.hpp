@@ -2,7 +2,8 @@
 // clockwise positive] and angular velocity omega(t) [rad/s] of a sine roll or of a measured angle series
 // (a table of time, angle). The fluid moves its walls with it, the solid its clamped particles, and the
 // probes use it to express displacements in the tank's frame. Knows nothing of case files:
-// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec.
+// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec. Also holds the
+// reader of time tables (read_time_table), which the case parser uses for every table a case names.
 #pragma once
 
 #include "core/types.hpp"

@@ -112,8 +112,8 @@ void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
 
 }  // namespace
 
-Scene build_scene(const CaseSpec& spec) {
-  check_scene_size(spec, available_memory_bytes());
+Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& available_memory) {
+  check_scene_size(spec, available_memory);
   Scene scene;
   for (const auto& b : spec.bodies) add_body(spec, b, scene);
   for (const auto& w : spec.walls) add_wall(spec, w, scene);

@@ -49,9 +49,6 @@ constexpr std::size_t program_bytes = std::size_t{85} << 20;
 /// Most particles of a scene, whatever the memory (the parser bounds the bodies alone to the same).
 constexpr double max_scene_particles = 1e9;
 
-/// Build the scene of a case. Throws CaseError when two bodies' particles come closer than dp/2, and
-/// (check_scene_size, before allocating) when the case needs more memory than the machine has available.
-Scene build_scene(const CaseSpec& spec);
 
 /// The particles build_scene makes for a case, counted from its rectangles without building them:
 /// bodies on the dp lattice, walls with their wall and dummy layers. Wall points that give way to
@@ -67,6 +64,12 @@ std::size_t estimate_memory_bytes(const CaseSpec& spec, const Scene& scene);
 /// The memory this machine has available for a new program [bytes]: MemAvailable of /proc/meminfo; none
 /// where that cannot be read.
 std::optional<std::size_t> available_memory_bytes();
+
+/// Build the scene of a case. Throws CaseError when two bodies' particles come closer than dp/2, and
+/// (check_scene_size, before allocating) when the case needs more memory than `available_memory` (by
+/// default what this machine has available; under MPI pass the same value on every rank, e.g. the
+/// smallest over the ranks, so that all of them take the same decision).
+Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& available_memory = available_memory_bytes());
 
 /// Throws CaseError naming dp, the particle count and the memory estimate when the case (count_particles,
 /// estimate_memory_bytes + program_bytes) needs more than `available` bytes (none: not checked) or has
