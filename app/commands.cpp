@@ -16,6 +16,7 @@
 
 #include <mpi.h>
 
+#include <climits>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -34,7 +35,12 @@ std::vector<std::string> RunOptions::all_overrides() const {
 
 int command_check(const RunOptions& opts) {
   const CaseSpec spec = load_case(opts.case_file, opts.all_overrides());
-  const Scene scene = build_scene(spec);
+  // Under mpirun every rank checks: all must take the same decision on the memory, so they compare the case
+  // with the smallest MemAvailable any of them read (otherwise one rank could stop and the others go on).
+  unsigned long long available = available_memory_bytes().value_or(ULLONG_MAX);
+  MPI_Allreduce(MPI_IN_PLACE, &available, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
+  const Scene scene = build_scene(spec, available == ULLONG_MAX ? std::nullopt
+                                                                : std::optional<std::size_t>(static_cast<std::size_t>(available)));
   const auto& p = scene.particles;
   fmt::print("case {} ({}): dp = {:g} m, end time {:g} s\n", spec.name, spec.file, spec.dp, spec.time.end);
   fmt::print("{:<20} {:<6} {:>10} {:>10} {:>10} {:>10}\n", "body", "kind", "particles", "wall", "dummy", "clamped");
@@ -43,10 +49,33 @@ int command_check(const RunOptions& opts) {
                c.n_clamped);
   fmt::print("total: {} particles ({} fluid, {} solid, {} wall, {} dummy)\n", p.size(), p.n_of_kind(ParticleKind::fluid),
              p.n_of_kind(ParticleKind::solid), p.n_of_kind(ParticleKind::wall), p.n_of_kind(ParticleKind::dummy));
+  // The region each body's particles represent (their bounding box + dp/2 on each side): the lattice rounds
+  // every side of a rectangle to whole particles, so a body can come out longer or shorter than written.
+  fmt::print("extent of the bodies (particles + dp/2 on each side):\n");
+  std::vector<std::string> warnings;
+  const auto show_rect = [&](const Rect& r) {
+    const auto x = [&](const Real v) { return std::abs(v) < 1e-9 * spec.dp ? Real(0) : v; };  // no round-off "1e-15"
+    return fmt::format("[{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] m ({:.6g} x {:.6g} m)", x(r.lo[0]), x(r.hi[0]), x(r.lo[1]),
+                       x(r.hi[1]), r.size()[0], r.size()[1]);
+  };
+  for (std::size_t k = 0; k < spec.bodies.size() && k < scene.counts.size(); ++k) {
+    const BodyCount& c = scene.counts[k];
+    std::string line = fmt::format("  {:<20} {}", c.name, show_rect(c.extent));
+    if (c.free_length)
+      line += fmt::format("; free length {:.6g} m along {} (file: {:.6g} m)", *c.free_length, c.free_axis == 0 ? "x" : "y",
+                          c.file_free_length);
+    fmt::print("{}\n", line);
+    if (c.extent_difference > 0.25 * spec.dp * (1 + 1e-9))
+      warnings.push_back(fmt::format("warning: body '{}' is represented by {}, not by its rectangle {}: a side moves by "
+                                     "{:.3g} m, more than dp/4 = {:.3g} m (the lattice fills round(side / dp) particles "
+                                     "per side; sides that are multiples of dp = {:g} m are exact)",
+                                     c.name, show_rect(c.extent), show_rect(spec.bodies[k].rect), c.extent_difference,
+                                     0.25 * spec.dp, spec.dp));
+  }
+  for (const auto& w : warnings) fmt::print("{}\n", w);
   const double mib = static_cast<double>(estimate_memory_bytes(spec, scene)) / (1024.0 * 1024.0);
-  // The program with its libraries (Trilinos, VTK, MPI) takes about 85 MiB before any particle: the peak of
-  // `mpsfsi run cases/hydrostatic.yaml` (1,600 fluid particles) is 86 MiB.
-  fmt::print("memory estimate: {:.1f} MiB of data, about {:.0f} MiB with the program\n", mib, mib + 85);
+  fmt::print("memory estimate: {:.1f} MiB of data, about {:.0f} MiB with the program\n", mib,
+             mib + static_cast<double>(program_bytes) / (1024.0 * 1024.0));
   if (!opts.output.empty()) {
     VtkSeriesWriter writer(opts.output, "particles");
     const auto path = writer.write(p, 0.0);

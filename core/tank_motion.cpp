@@ -1,34 +1,119 @@
-// Prescribed tank roll: sine or measured angle table (linear interpolation, centred-difference omega).
+// Prescribed tank roll: sine or measured angle table (linear interpolation, centred-difference omega); the
+// reader of the case files' time tables (tank motion, wavelets).
 #include "core/tank_motion.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 namespace mpsfsi {
 
-void read_angle_table(const std::string& path, TankMotionParams& params) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("tank_motion: cannot read " + path);
-  params.time.clear();
-  params.angle.clear();
+namespace {
+
+std::string trimmed(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t\r");
+  if (first == std::string::npos) return {};
+  return s.substr(first, s.find_last_not_of(" \t\r") - first + 1);
+}
+
+/// A plain decimal number ([+-]digits[.digits][e[+-]digits], as in the case files): no hex, inf or nan;
+/// finite after conversion.
+std::optional<Real> decimal(const std::string& s) {
+  if (s.empty() || s.find_first_not_of("0123456789+-.eE") != std::string::npos) return std::nullopt;
+  if (s.find_first_of("0123456789") == std::string::npos) return std::nullopt;
+  char* end = nullptr;
+  const Real value = std::strtod(s.c_str(), &end);
+  if (end != s.c_str() + s.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+/// A line of the file as shown in messages: printable ASCII (anything else as '?'), at most 60 characters.
+std::string shown(const std::string& line) {
+  std::string out = line.size() > 60 ? line.substr(0, 57) + "..." : line;
+  for (auto& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  return out;
+}
+
+std::string g(const Real x) {
+  std::ostringstream s;
+  s << x;
+  return s.str();
+}
+
+}  // namespace
+
+TimeTable read_time_table(const std::string& path, const TimeTableColumn& column) {
+  namespace fs = std::filesystem;
+  const std::string form = "a CSV file of time [s], " + column.name;
+  const auto fail = [](const std::string& message) { throw TableError(message); };
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) fail("no such file '" + path + "'; expected " + form);
+  if (!fs::is_regular_file(status))
+    fail("'" + path + "' is not a regular file (" +
+         (fs::is_directory(status) ? "a directory" : fs::is_fifo(status) ? "a FIFO" : "a device, socket or other special file") +
+         "); expected " + form);
+  const auto size = fs::file_size(path, ec);
+  const std::string size_form = "expected a table file of at most " + std::to_string(max_table_bytes >> 20) + " MiB";
+  if (!ec && size > max_table_bytes) fail("'" + path + "' has " + std::to_string(size) + " bytes; " + size_form);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail("cannot read '" + path + "'; expected " + form);
+
+  TimeTable table;
   std::string line;
+  std::uintmax_t bytes = 0;  // read so far: a file may grow while it is read
+  std::size_t line_no = 0;
+  bool header_allowed = true;
   while (std::getline(in, line)) {
-    std::replace(line.begin(), line.end(), ',', ' ');
-    std::istringstream ls(line);
-    Real t = 0, deg = 0;
-    if (ls >> t >> deg) {
-      params.time.push_back(t);
-      params.angle.push_back(deg * pi / 180);
+    ++line_no;
+    bytes += line.size() + 1;
+    if (bytes > max_table_bytes + 1) fail("'" + path + "' has more than " + std::to_string(max_table_bytes) + " bytes; " + size_form);
+    const std::string at = path + ":" + std::to_string(line_no) + ": ";
+    std::string row = trimmed(line.substr(0, line.find('#')));
+    if (row.empty()) continue;
+    std::replace(row.begin(), row.end(), ',', ' ');
+    std::istringstream ls(row);
+    std::string a, b, extra;
+    ls >> a >> b;
+    const auto time = decimal(a), value = decimal(b);
+    if (!time || !value || static_cast<bool>(ls >> extra)) {
+      if (header_allowed && !time) {
+        header_allowed = false;
+        continue;
+      }
+      fail(at + "'" + shown(trimmed(line)) + "': expected a row of two numbers: time [s], " + column.name);
     }
+    header_allowed = false;
+    if (!(std::abs(*value) < column.bound)) fail(at + column.name + " = " + g(*value) + ": expected " + column.form);
+    if (!table.time.empty() && !(*time > table.time.back()))
+      fail(at + "time " + g(*time) + " s: expected times that increase strictly");
+    if (table.time.size() == max_table_rows)
+      fail(at + "more than " + std::to_string(max_table_rows) + " rows; expected at most " +
+           std::to_string(max_table_rows) + " rows of time [s], " + column.name);
+    table.time.push_back(*time);
+    table.value.push_back(*value);
   }
-  if (params.time.size() < 2) throw std::runtime_error("tank_motion: " + path + " needs at least two rows of time, angle");
-  for (std::size_t k = 1; k < params.time.size(); ++k)
-    if (!(params.time[k] > params.time[k - 1]))
-      throw std::runtime_error("tank_motion: " + path + ": times must increase (row " + std::to_string(k + 1) + ")");
+  if (in.bad()) fail("cannot read '" + path + "'; expected " + form);
+  if (table.time.size() < 2)
+    fail("'" + path + "' has " + std::to_string(table.time.size()) + " row(s); expected at least two rows of time [s], " +
+         column.name);
+  return table;
+}
+
+TimeTableColumn angle_table_column() { return {"angle [deg]", 90, "an angle in (-90, 90) degrees"}; }
+
+void read_angle_table(const std::string& path, TankMotionParams& params) {
+  TimeTable table = read_time_table(path, angle_table_column());
+  params.time = std::move(table.time);
+  params.angle = std::move(table.value);
+  for (auto& a : params.angle) a *= pi / 180;
 }
 
 TankMotion::TankMotion(TankMotionParams params) : params_(std::move(params)) {

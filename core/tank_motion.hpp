@@ -2,11 +2,15 @@
 // clockwise positive] and angular velocity omega(t) [rad/s] of a sine roll or of a measured angle series
 // (a table of time, angle). The fluid moves its walls with it, the solid its clamped particles, and the
 // probes use it to express displacements in the tank's frame. Knows nothing of case files:
-// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec.
+// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec. Also holds the
+// reader of time tables (read_time_table), which the case parser uses for every table a case names.
 #pragma once
 
 #include "core/types.hpp"
 
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,10 +30,41 @@ struct TankMotionParams {
   Real derivative_half_window = 0.025;
 };
 
-/// Reads a CSV (or whitespace-separated) file of time [s], angle [deg] into params.time / params.angle
-/// (angle converted to radians). Lines that do not start with two numbers (comments, headers) are
-/// skipped. Throws std::runtime_error if the file cannot be read, has fewer than two rows or times that
+/// A table of time [s] and one value per row, as read by read_time_table.
+struct TimeTable {
+  std::vector<Real> time, value;
+};
+
+/// What read_time_table accepts in the value column.
+struct TimeTableColumn {
+  std::string name = "value";                           ///< for messages, e.g. "angle [deg]"
+  Real bound = std::numeric_limits<Real>::infinity();  ///< values must have |value| < bound
+  std::string form = "a number";                        ///< the allowed values, for messages
+};
+
+/// An unreadable or malformed table file; the message names the file (and the line) and the expected form.
+class TableError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Largest table file read, and most rows (a measured series at 1 kHz for over 15 minutes fits both).
+constexpr std::uintmax_t max_table_bytes = 16u << 20;
+constexpr std::size_t max_table_rows = 1000000;
+
+/// Reads the one table format of the case files (tank_motion.file, sources[].wavelet.file): CSV (or
+/// whitespace-separated) rows of time [s], value; '#' comments, empty lines and one header line before the
+/// data are skipped; every other line must be two plain decimal numbers. At least two rows, times strictly
+/// increasing. Throws TableError for a missing or non-regular file (a FIFO or device would block or never
+/// end), a file over max_table_bytes or max_table_rows, a bad row, a value outside `column`, or times that
 /// do not increase.
+TimeTable read_time_table(const std::string& path, const TimeTableColumn& column = {});
+
+/// The column of a tank-motion table: angles in degrees within (-90, 90) (as a sine roll's amplitude).
+TimeTableColumn angle_table_column();
+
+/// Reads a tank-motion table (read_time_table with angle_table_column) into params.time / params.angle,
+/// the angles converted to radians. Throws TableError.
 void read_angle_table(const std::string& path, TankMotionParams& params);
 
 class TankMotion {

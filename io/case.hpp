@@ -63,6 +63,11 @@ struct BodySpec {
   Real angular_velocity = 0;        ///< initial angular velocity about the body's centroid [rad/s]
 };
 
+/// The part of a body that is not clamped: a clamp that spans the body's whole width (height) cuts its
+/// height (width); otherwise the whole body counts. Only this part must stay clear of the walls, so a
+/// clamped end may be embedded in a wall (the wall particles there give way, see io/scene.cpp).
+Rect free_part(const BodySpec& b);
+
 enum class WallType { box, block };
 
 struct WallSpec {
@@ -80,6 +85,8 @@ struct TankMotionSpec {
   Real amplitude = 0;           ///< sine_roll: amplitude [rad] (case file in degrees)
   Real period = 1;              ///< sine_roll: period [s]
   std::string file;             ///< table: CSV of time [s], angle [deg], resolved relative to the case file
+  std::vector<Real> time;       ///< table: the rows read from `file` when the case was parsed, times [s] ...
+  std::vector<Real> angle;      ///< ... and angles [rad]
 };
 
 enum class ProbeType { pressure, surge_front, column_height, displacement };
@@ -126,7 +133,10 @@ struct FluidNumerics {
   Real beta2 = 0.85;            ///< ... and N_i < beta2 N0
   std::string gradient = "min_pressure";  ///< min_pressure | corrected
   std::string solver = "cg";              ///< cg | gmres
-  std::string preconditioner = "muelu";   ///< muelu | chebyshev | ilu | jacobi | sgs | ssor | none
+  /// ssor | sgs | jacobi | chebyshev | muelu | ilu | none. Default ssor (Eisenstat SSOR, omega 1.4): the fastest
+  /// measured on the dam break, setup + solve 25.5 ms per step against 37.4 (jacobi) and 110 (muelu, rebuilt
+  /// every step), docs/performance.md "Pressure solve".
+  std::string preconditioner = "ssor";
   Real tolerance = 1e-8;                  ///< relative residual of the pressure solve
   /// Absolute stop of the pressure solve tied to the incompressibility error: the solve also stops when
   /// the RMS over the rows of r_i dt^2 / rho (the density error, as a fraction of n0, that the residual r
@@ -135,6 +145,8 @@ struct FluidNumerics {
   Real density_tolerance = 1e-6;
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between
+  /// The largest share of a fluid body's particles that may leave the domain before the run stops (exit 3).
+  Real max_loss = 0.05;
   LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
   Real max_loss = 0.05;
 };
@@ -268,8 +280,9 @@ CaseSpec parse_case(const std::string& yaml_text, const std::string& name,
 const std::vector<std::string>& restart_free_keys();
 /// Numerical controls a restart may change, e.g. to continue with a smaller time step after a run went
 /// unstable: time.cfl, time.dt, time.dt_max, coupling.subcycles, fluid.solver, fluid.preconditioner,
-/// fluid.tolerance, fluid.max_iterations, fluid.preconditioner_rebuild_every, solid.dt, solid.dt_factor. The
-/// continuation then is not the original run's. Every other key must equal the checkpoint's case.
+/// fluid.tolerance, fluid.max_iterations, fluid.preconditioner_rebuild_every, fluid.max_loss, solid.dt,
+/// solid.dt_factor. The continuation then is not the original run's. Every other key must equal the
+/// checkpoint's case.
 const std::vector<std::string>& restart_tunable_keys();
 /// True when `key` (dotted, e.g. "time.cfl" or "bodies[0].name") is one of `roots` or lies below one.
 bool key_under(const std::string& key, const std::vector<std::string>& roots);

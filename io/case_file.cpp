@@ -10,12 +10,15 @@
 // follow the reading.
 #include "io/case.hpp"
 
+#include "core/tank_motion.hpp"
+
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -47,6 +50,19 @@ int CaseSpec::solid_material_index(const std::string& name) const {
   return index_by_name(solid_materials, name);
 }
 
+Rect free_part(const BodySpec& b) {
+  Rect r = b.rect;
+  if (!b.clamp) return r;
+  const Rect& c = *b.clamp;
+  for (int a = 0; a < 2; ++a) {
+    const int o = 1 - a;  // the clamp spans axis o fully and cuts along axis a
+    if (c.lo[o] > r.lo[o] || c.hi[o] < r.hi[o]) continue;
+    if (c.lo[a] <= r.lo[a] && c.hi[a] < r.hi[a]) r.lo[a] = std::max(r.lo[a], c.hi[a]);
+    else if (c.hi[a] >= r.hi[a] && c.lo[a] > r.lo[a]) r.hi[a] = std::min(r.hi[a], c.lo[a]);
+  }
+  return r;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -54,6 +70,41 @@ namespace fs = std::filesystem;
 /// Largest number of lattice cells along one side of a rectangle, and of particles in all bodies.
 constexpr Real max_cells_per_side = 1e6;
 constexpr Real max_particles = 1e9;
+/// Largest case file read (the shipped ones have a few KiB).
+constexpr std::uintmax_t max_case_bytes = 16u << 20;
+
+// Bounds that keep a case's work and numbers finite. Each is far beyond any case the method can run, so
+// a value outside is a typo or a unit mistake, not a choice (docs/case-format.md lists them).
+/// Effective radii in units of dp: 10 dp is about pi 10^2 = 314 neighbours per particle (2.1 dp: 13).
+constexpr Real max_radius_dp = 10;
+/// Stencil radii of sources and receivers [dp].
+constexpr Real max_stencil_dp = 10;
+/// Smallest time step [s], and most steps up to time.end with a fixed one.
+constexpr Real min_time_step = 1e-12;
+constexpr Real max_steps = 1e9;
+/// Smallest output / receiver interval [s], and most frames / rows up to time.end.
+constexpr Real min_interval = 1e-9;
+constexpr Real max_frames = 1e6;
+/// Most solid sub-steps per fluid step.
+constexpr long long max_subcycles = 100000;
+/// Largest gravity [m/s2] (1000 g), initial speed of a body [m/s] and initial angular velocity [rad/s].
+constexpr Real max_gravity = 1e4;
+constexpr Real max_speed = 1e4;
+constexpr Real max_angular_velocity = 1e4;
+/// Shortest sine-roll period [s] (with the largest amplitude, the tank turns at up to 2 pi^2 / period rad/s).
+constexpr Real min_period = 1e-3;
+/// Narrowest lateral-wall gap [m] (the friction rate grows as 1 / gap^2).
+constexpr Real min_gap = 1e-6;
+/// Largest solid-load peak pressure [Pa] and source amplitude [N m/m or N/m].
+constexpr Real max_load = 1e13;
+/// Material ranges: densities [kg/m3], sound and wave speeds [m/s], kinematic viscosity [m2/s], Young's
+/// modulus [Pa].
+constexpr Real min_density = 1e-3, max_density = 1e5;
+constexpr Real min_speed = 1e-3, max_wave_speed = 1e5;
+constexpr Real max_viscosity = 1e4;
+constexpr Real min_modulus = 1e-3, max_modulus = 1e13;
+/// Longest name (file-name safe: case names name the output folder).
+constexpr std::size_t max_name_length = 64;
 
 // ---------------------------------------------------------------------------------------------
 // Small string helpers.
@@ -89,15 +140,50 @@ bool is_digits(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](const unsigned char c) { return std::isdigit(c); });
 }
 
-/// Names of cases, materials, bodies, walls, probes and output fields: letters, digits, '_' and '-',
-/// starting with a letter or '_' (so that they are file-name safe and never look like a list
-/// index or contain the '.' of a --set path).
+/// Names of cases, materials, bodies, walls, probes and output fields: at most max_name_length letters,
+/// digits, '_' and '-', starting with a letter or '_' (so that they are file-name safe and never look like
+/// a list index or contain the '.' of a --set path).
 bool is_name(const std::string& s) {
-  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  if (s.empty() || s.size() > max_name_length || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_'))
+    return false;
   return std::all_of(s.begin(), s.end(), [](const unsigned char c) { return std::isalnum(c) || c == '_' || c == '-'; });
 }
 
-const std::string name_form = "a name of letters, digits, '_' and '-' that starts with a letter or '_'";
+/// The position of the first byte of `s` that is not valid UTF-8 (a stray continuation byte, an overlong
+/// form, a surrogate or a code point above U+10FFFF, a truncated sequence), or npos: text that goes into
+/// case.resolved.yaml must stay readable by YAML readers.
+std::size_t utf8_error(const std::string& s) {
+  std::size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t n = 0;
+    std::uint32_t cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xc2 && c <= 0xdf) {
+      n = 1, cp = c & 0x1fu;
+    } else if (c >= 0xe0 && c <= 0xef) {
+      n = 2, cp = c & 0x0fu;
+    } else if (c >= 0xf0 && c <= 0xf4) {
+      n = 3, cp = c & 0x07u;
+    } else {
+      return i;
+    }
+    for (std::size_t k = 1; k <= n; ++k) {
+      if (i + k >= s.size()) return i;
+      const auto d = static_cast<unsigned char>(s[i + k]);
+      if ((d & 0xc0u) != 0x80u) return i;
+      cp = (cp << 6) | (d & 0x3fu);
+    }
+    if ((n == 2 && cp < 0x800) || (n == 3 && (cp < 0x10000 || cp > 0x10ffff)) || (cp >= 0xd800 && cp <= 0xdfff))
+      return i;
+    i += n + 1;
+  }
+  return std::string::npos;
+}
+
+const std::string name_form = "a name of at most 64 letters, digits, '_' and '-' that starts with a letter or '_'";
 
 /// A decimal number: [+-]digits[.digits][e[+-]digits]. No hex, inf or nan; finite after conversion.
 std::optional<Real> parse_real(const std::string& s) {
@@ -271,6 +357,14 @@ Check in_half_open(const Real lo, const Real hi) {
 Check in_open(const Real lo, const Real hi) {
   return [=](const Real x) { return x > lo && x < hi; };
 }
+/// lo <= x <= hi
+Check in_closed(const Real lo, const Real hi) {
+  return [=](const Real x) { return x >= lo && x <= hi; };
+}
+/// |x| <= bound
+Check magnitude_at_most(const Real bound) {
+  return [=](const Real x) { return std::abs(x) <= bound; };
+}
 
 bool is_plain_scalar(const YAML::Node& node) { return node.IsScalar() && node.Tag() == "?"; }
 
@@ -297,7 +391,12 @@ bool to_bool(const Source& src, const Field& f, const std::string& form) {
 
 std::string to_text(const Source& src, const Field& f, const std::string& form) {
   if (!f.node.IsScalar() || trim(f.node.Scalar()).empty()) src.expected(f, form);
-  return f.node.Scalar();
+  const std::string& s = f.node.Scalar();
+  if (const std::size_t bad = utf8_error(s); bad != std::string::npos) {
+    src.fail(f, fmt::format("{}: the text is not valid UTF-8 (byte 0x{:02x} at position {}); expected {}, as UTF-8 text",
+                            show_path(f.path), static_cast<unsigned char>(s[bad]), bad + 1, form));
+  }
+  return s;
 }
 
 std::string to_name(const Source& src, const Field& f, const std::string& form) {
@@ -516,6 +615,29 @@ class MapReader {
 const std::string rect_form = "a rectangle {min: [x, y], max: [x, y]} in metres";
 const std::string point_form = "a point [x, y] in metres";
 
+/// A time step of key `key` (already read, `dt`) at least min_time_step and at most max_steps up to `end`.
+void check_time_step(MapReader& r, const std::string& key, const Real dt, const Real end) {
+  const Real lowest = std::max(min_time_step, end / max_steps);
+  if (dt < lowest)
+    r.source().expected(r.at(key), fmt::format("a time step of at least {:g} s (at least {:g} s, and at most {:g} steps up "
+                                               "to time.end = {:g} s) [s]",
+                                               lowest, min_time_step, max_steps, end));
+}
+
+/// An interval between outputs of key `key` (already read, `interval`; `what` are the outputs, e.g.
+/// "frames"): at least min_interval and at most max_frames up to time.end. The default (`given` false) is
+/// checked too: a long time.end may need a longer interval than the default.
+void check_interval(MapReader& r, const std::string& key, const Real interval, const bool given, const Real end,
+                    const std::string& what) {
+  const Real lowest = std::max(min_interval, end / max_frames);
+  if (interval >= lowest) return;
+  const std::string form = fmt::format("an interval of at least {:g} s (at least {:g} s, and at most {:g} {} up to "
+                                       "time.end = {:g} s) [s]",
+                                       lowest, min_interval, max_frames, what, end);
+  if (given) r.source().expected(r.at(key), form);
+  r.source().fail(r.field(), fmt::format("{} = {:g} (default): expected {}", r.path_of(key), interval, form));
+}
+
 void read_time(MapReader r, TimeSpec& time) {
   time.end = r.number("end", positive, "a positive number [s]");
   time.dt = r.optional_number("dt", positive, "a positive number (fixed time step) [s]");
@@ -523,6 +645,9 @@ void read_time(MapReader r, TimeSpec& time) {
   const auto dt_max = r.optional_number("dt_max", positive, "a positive number (largest adaptive time step) [s]");
   r.finish();
   const Source& src = r.source();
+  if (time.dt) check_time_step(r, "dt", *time.dt, time.end);
+  if (dt_max && *dt_max < min_time_step)
+    src.expected(r.at("dt_max"), fmt::format("a time step of at least {:g} s (largest adaptive time step) [s]", min_time_step));
   if (time.dt && time.cfl)
     src.fail(r.at("cfl"), "time: both dt and cfl are given; expected exactly one of time.dt (fixed step [s]) or "
                           "time.cfl (adaptive step)");
@@ -535,6 +660,7 @@ void read_time(MapReader r, TimeSpec& time) {
 
 void read_materials(MapReader r, CaseSpec& spec) {
   const Source& src = r.source();
+  const std::string density_form = fmt::format("a number in [{:g}, {:g}] (density) [kg/m3]", min_density, max_density);
   if (r.empty()) src.expected(r.field(), "a map of materials, e.g. water: {type: fluid, rho: 1000, nu: 1.0e-6}");
   for (const auto& [name, field] : r.items()) {
     if (!is_name(name)) src.fail(Field{field.key, field.path, field.key}, fmt::format("material name '{}': expected {}", name, name_form));
@@ -542,19 +668,24 @@ void read_materials(MapReader r, CaseSpec& spec) {
     if (m.choice("type", {"fluid", "solid"}) == "fluid") {
       FluidMaterial f;
       f.name = name;
-      f.rho = m.number("rho", positive, "a positive number (density) [kg/m3]");
-      f.nu = m.number("nu", non_negative, "a non-negative number (kinematic viscosity) [m2/s]");
-      f.c = m.number("c", f.c, positive, "a positive number (sound speed of the compressibility term) [m/s]");
+      f.rho = m.number("rho", in_closed(min_density, max_density), density_form);
+      f.nu = m.number("nu", in_closed(0, max_viscosity),
+                      fmt::format("a number in [0, {:g}] (kinematic viscosity) [m2/s]", max_viscosity));
+      f.c = m.number("c", f.c, in_closed(min_speed, max_wave_speed),
+                     fmt::format("a number in [{:g}, {:g}] (sound speed of the compressibility term) [m/s]", min_speed,
+                                 max_wave_speed));
       f.kappa = m.number("kappa", f.kappa, in_half_open(0, 1), "a number in (0, 1] (relaxation of the PPE source)");
       spec.fluid_materials.push_back(f);
     } else {
       SolidMaterial s;
       s.name = name;
-      s.rho = m.number("rho", positive, "a positive number (density) [kg/m3]");
+      s.rho = m.number("rho", in_closed(min_density, max_density), density_form);
       // Elastic constants: either E and nu, or the wave speeds vp and vs (then E and nu are the equivalents).
       if (m.has("vp") || m.has("vs")) {
-        s.vp = m.number("vp", positive, "a positive number (P-wave speed, given with vs) [m/s]");
-        s.vs = m.number("vs", positive, "a positive number (S-wave speed, given with vp) [m/s]");
+        s.vp = m.number("vp", in_closed(min_speed, max_wave_speed),
+                        fmt::format("a number in [{:g}, {:g}] (P-wave speed, given with vs) [m/s]", min_speed, max_wave_speed));
+        s.vs = m.number("vs", in_closed(min_speed, max_wave_speed),
+                        fmt::format("a number in [{:g}, {:g}] (S-wave speed, given with vp) [m/s]", min_speed, max_wave_speed));
         if (!(*s.vp > std::sqrt(4.0 / 3.0) * *s.vs))
           src.expected(m.at("vp"), fmt::format("vp > sqrt(4/3) vs = {:g} m/s (positive bulk modulus)", std::sqrt(4.0 / 3.0) * *s.vs));
         if (m.has("E") || m.has("nu"))
@@ -565,7 +696,8 @@ void read_materials(MapReader r, CaseSpec& spec) {
         s.E = mu * (3 * lambda + 2 * mu) / (lambda + mu);
         s.nu = lambda / (2 * (lambda + mu));
       } else {
-        s.E = m.number("E", positive, "a positive number (Young's modulus) [Pa]");
+        s.E = m.number("E", in_closed(min_modulus, max_modulus),
+                       fmt::format("a number in [{:g}, {:g}] (Young's modulus) [Pa]", min_modulus, max_modulus));
         s.nu = m.number("nu", in_open(-1, 0.5), "a number in (-1, 0.5) (Poisson's ratio)");
       }
       s.fracture_strain = m.optional_number("fracture_strain", positive, "a positive number (strain at which bonds break)");
@@ -602,7 +734,11 @@ void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::stri
     b.rect = r.rect("rectangle", rect_form + " filled with particles");
     b.clamp = r.optional_rect("clamp", rect_form + " (solid bodies: particles inside are clamped)");
     b.velocity = r.vec("velocity", Vec::Zero(), "an initial velocity [vx, vy] in m/s");
-    b.angular_velocity = r.number("angular_velocity", 0, any_number, "a number (initial angular velocity) [rad/s]");
+    if (!(b.velocity.norm() <= max_speed))
+      src.expected(r.at("velocity"), fmt::format("an initial velocity [vx, vy] in m/s of magnitude at most {:g} m/s", max_speed));
+    b.angular_velocity = r.number("angular_velocity", 0, magnitude_at_most(max_angular_velocity),
+                                  fmt::format("a number in [-{0:g}, {0:g}] (initial angular velocity) [rad/s]",
+                                              max_angular_velocity));
     r.finish();
     g.body_rect.push_back(r.at("rectangle"));
     g.body_material.push_back(r.at("material"));
@@ -638,22 +774,6 @@ bool inside_box(const Rect& r, const WallSpec& box) {
   Rect bound = box.rect;
   if (box.open_top) bound.hi[1] = std::numeric_limits<Real>::infinity();
   return inside(r, bound);
-}
-
-/// The part of a body that is not clamped: a clamp that spans the body's whole width (height) cuts its
-/// height (width); otherwise the whole body counts. Only this part must stay clear of the walls, so a
-/// clamped end may be embedded in a wall (the wall particles there give way, see io/scene.cpp).
-Rect free_part(const BodySpec& b) {
-  Rect r = b.rect;
-  if (!b.clamp) return r;
-  const Rect& c = *b.clamp;
-  for (int a = 0; a < 2; ++a) {
-    const int o = 1 - a;  // the clamp spans axis o fully and cuts along axis a
-    if (c.lo[o] > r.lo[o] || c.hi[o] < r.hi[o]) continue;
-    if (c.lo[a] <= r.lo[a] && c.hi[a] < r.hi[a]) r.lo[a] = std::max(r.lo[a], c.hi[a]);
-    else if (c.hi[a] >= r.hi[a] && c.lo[a] > r.lo[a]) r.hi[a] = std::min(r.hi[a], c.lo[a]);
-  }
-  return r;
 }
 
 /// Every rectangle is inside the domain and at least one particle (dp/2) thick; bodies do not overlap
@@ -737,6 +857,21 @@ void check_body_materials(const Source& src, const CaseSpec& spec, const Geometr
   }
 }
 
+/// A table file named by `f` (the path as resolved), read by read_time_table (core/tank_motion.hpp), the one
+/// reader of the case's tables; its problems become "location: key = value: <file:line: problem>".
+TimeTable read_table(const Source& src, const Field& f, const fs::path& path, const TimeTableColumn& column) {
+  try {
+    return read_time_table(path.string(), column);
+  } catch (const TableError& e) {
+    src.fail(f, fmt::format("{} = {}: {}", f.path, show(f.node), e.what()));
+  }
+}
+
+/// A file named in the case: an absolute path, or relative to the case file's directory.
+fs::path resolve(const fs::path& base_dir, const std::string& file) {
+  return fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
+}
+
 void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
   const Source& src = r.source();
   TankMotionSpec& m = spec.tank_motion;
@@ -746,17 +881,17 @@ void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
     m.pivot = r.vec("pivot", point_form + " (centre of the roll)");
     m.amplitude = r.number("amplitude_deg", in_open(0, 90), "a number of degrees in (0, 90) (roll amplitude)") * pi / 180;
     m.period = r.number("period", positive, "a positive number (roll period) [s]");
+    if (m.period < min_period) src.expected(r.at("period"), fmt::format("a roll period of at least {:g} s", min_period));
   } else if (type == "table") {
     m.type = TankMotionType::table;
     m.pivot = r.vec("pivot", point_form + " (centre of the roll)");
     const std::string file = r.text("file", "the path of a CSV file of time [s], angle [deg], relative to the case file");
-    const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec))
-      src.fail(r.at("file"), fmt::format("tank_motion.file = {}: no such file '{}'; expected a CSV file of time [s], "
-                                         "angle [deg] (relative to the case file)",
-                                         file, path.string()));
+    const fs::path path = resolve(base_dir, file);
     m.file = path.string();
+    TimeTable table = read_table(src, r.at("file"), path, angle_table_column());
+    m.time = std::move(table.time);
+    m.angle = std::move(table.value);
+    for (auto& a : m.angle) a *= pi / 180;
   }
   r.finish();
   if (m.type != TankMotionType::none && spec.walls.empty())
@@ -764,11 +899,12 @@ void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
 }
 
 void read_coupling(MapReader r, CouplingSpec& c) {
-  const std::string form = "a positive integer or auto (solid sub-steps per fluid step)";
+  const std::string form =
+      fmt::format("a positive integer up to {} or auto (solid sub-steps per fluid step)", max_subcycles);
   if (const auto f = r.optional("subcycles")) {
     c.subcycles = (is_plain_scalar(f->node) && f->node.Scalar() == "auto")
                       ? 0
-                      : to_int(r.source(), *f, [](const long long n) { return n >= 1; }, form);
+                      : to_int(r.source(), *f, [](const long long n) { return n >= 1 && n <= max_subcycles; }, form);
   }
   c.solid_damping = r.number("solid_damping", c.solid_damping, [](Real x) { return x >= 0; },
                              "a number >= 0 (solid bond damping time in units of dp / c_p)");
@@ -780,6 +916,7 @@ void read_coupling(MapReader r, CouplingSpec& c) {
 void read_lateral_walls(MapReader r, const TankMotionSpec& motion, LateralWallFriction& w) {
   if (!r.field().node.IsDefined() || r.field().node.IsNull()) return;
   w.gap = r.number("gap", positive, "a positive number (distance between the front and back walls) [m]");
+  if (w.gap < min_gap) r.source().expected(r.at("gap"), fmt::format("a gap of at least {:g} m (distance between the front and back walls) [m]", min_gap));
   w.model = r.choice("model", w.model, {"stokes", "poiseuille"});
   if (w.model == "stokes") {
     const auto f = r.optional_number("frequency", positive, "a positive number (oscillation frequency) [Hz]");
@@ -795,11 +932,35 @@ void read_lateral_walls(MapReader r, const TankMotionSpec& motion, LateralWallFr
   r.finish();
 }
 
+/// An effective radius in units of dp, in (1, max_radius_dp]: beyond, the neighbour search and the
+/// operators would do about pi re^2 work per particle (re = 1e6: 3e12), which the message says.
+Real radius_in_dp(MapReader& r, const std::string& key, const Real fallback, const std::string& what) {
+  const std::string form = fmt::format("a number in (1, {:g}] ({}, in units of dp)", max_radius_dp, what);
+  const auto f = r.optional(key);
+  if (!f) return fallback;
+  const Real re = to_real(r.source(), *f, [](Real x) { return x > 1; }, form);
+  if (re > max_radius_dp)
+    r.source().fail(*f, fmt::format("{} = {}: about pi re^2 = {:.2g} neighbours per particle; expected {} (at most about "
+                                    "{:.0f} neighbours)",
+                                    f->path, show(f->node), pi * re * re, form, pi * max_radius_dp * max_radius_dp));
+  return re;
+}
+
+/// A stencil radius [m] (sources, receivers) of key `key`, at most max_stencil_dp dp; default 2 dp.
+Real stencil_radius(MapReader& r, const std::string& key, const Real dp) {
+  const std::string form = "a positive number (radius of the particle stencil; default 2 dp) [m]";
+  const Real radius = r.number(key, 2 * dp, positive, form);
+  if (radius > max_stencil_dp * dp)
+    r.source().fail(r.at(key), fmt::format("{} = {}: {:.3g} dp, about {:.2g} particles in the stencil; expected a radius "
+                                           "of at most {:g} dp = {:g} m (dp = {:g} m)",
+                                           r.path_of(key), show(r.at(key).node), radius / dp,
+                                           pi * radius * radius / (dp * dp), max_stencil_dp, max_stencil_dp * dp, dp));
+  return radius;
+}
+
 void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidNumerics& n) {
-  n.re_gradient = r.number("re_gradient", n.re_gradient, [](Real x) { return x > 1; },
-                           "a number > 1 (effective radius of density and gradient, in units of dp)");
-  n.re_laplacian = r.number("re_laplacian", n.re_laplacian, [](Real x) { return x > 1; },
-                            "a number > 1 (effective radius of the Laplacian, in units of dp)");
+  n.re_gradient = radius_in_dp(r, "re_gradient", n.re_gradient, "effective radius of density and gradient");
+  n.re_laplacian = radius_in_dp(r, "re_laplacian", n.re_laplacian, "effective radius of the Laplacian");
   n.beta1 = r.number("beta1", n.beta1, in_half_open(0, 1), "a number in (0, 1] (free surface: n_i < beta1 n0)");
   n.beta2 = r.number("beta2", n.beta2, in_half_open(0, 1), "a number in (0, 1] (free surface: N_i < beta2 N0)");
   n.gradient = r.choice("gradient", n.gradient, {"min_pressure", "corrected"});
@@ -814,14 +975,18 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidNumeric
   n.preconditioner_rebuild_every =
       r.integer("preconditioner_rebuild_every", n.preconditioner_rebuild_every, [](const long long k) { return k >= 1; },
                 "a positive integer (full preconditioner setup every N steps)");
+  n.max_loss = r.number("max_loss", n.max_loss, in_closed(0, 1),
+                        "a number in [0, 1] (largest share of a fluid body's particles that may leave the domain before "
+                        "the run stops)");
   read_lateral_walls(r.optional_map("lateral_walls", "a map {gap, model: stokes | poiseuille, frequency}"), motion,
                      n.lateral_walls);
   r.finish();
 }
 
-void read_solid_numerics(MapReader r, const std::vector<SolidMaterial>& materials, SolidNumerics& n) {
-  n.re = r.number("re", n.re, [](Real x) { return x > 1; }, "a number > 1 (effective radius of the bonds, in units of dp)");
+void read_solid_numerics(MapReader r, const std::vector<SolidMaterial>& materials, const Real end, SolidNumerics& n) {
+  n.re = radius_in_dp(r, "re", n.re, "effective radius of the bonds");
   n.dt = r.optional_number("dt", positive, "a positive number (solid time step) [s]");
+  if (n.dt) check_time_step(r, "dt", *n.dt, end);
   n.plane_stress = r.boolean("plane_stress", n.plane_stress, "true (plane stress) or false (plane strain)");
   n.wide_plate = r.boolean("wide_plate", n.wide_plate,
                            "true (plane stress with the wide-plate bending modulus E / (1 - nu^2)) or false");
@@ -867,7 +1032,7 @@ void read_solid_loads(MapReader& top, CaseSpec& spec) {
     l.body = r.name("body", "the name of a solid body");
     l.region = r.rect("region", rect_form + " (particles of the body inside are loaded)");
     l.direction = r.vec("direction", "a non-zero direction [x, y] of the force");
-    l.peak = r.number("peak", any_number, "a number (peak pressure) [Pa]");
+    l.peak = r.number("peak", magnitude_at_most(max_load), fmt::format("a number in [-{0:g}, {0:g}] (peak pressure) [Pa]", max_load));
     l.time = r.number("time", non_negative, "a non-negative number (time of the peak) [s]");
     l.width = r.number("width", positive, "a positive number (1/e half-width of the pulse) [s]");
     r.finish();
@@ -881,54 +1046,16 @@ void read_solid_loads(MapReader& top, CaseSpec& spec) {
   }
 }
 
-/// A wavelet table: CSV (or whitespace-separated) rows of time [s], value; '#' comments, empty lines
-/// and one header line before the data are skipped. At least two rows, times strictly increasing.
-void read_wavelet_table(const Source& src, const Field& f, const fs::path& path, WaveletSpec& w) {
-  std::ifstream in(path);
-  if (!in) src.fail(f, fmt::format("{} = {}: cannot read '{}'; expected a CSV file of time [s], value", f.path,
-                                   f.node.Scalar(), path.string()));
-  std::string line;
-  int line_no = 0;
-  bool header_allowed = true;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const std::string t = trim(line.substr(0, line.find('#')));
-    if (t.empty() || t == "\r") continue;
-    std::string row = t;
-    std::replace(row.begin(), row.end(), ',', ' ');
-    std::istringstream ls(row);
-    std::string a, b, extra;
-    ls >> a >> b;
-    const auto time = parse_real(a), value = parse_real(trim(b));
-    const bool more = static_cast<bool>(ls >> extra) && !trim(extra).empty();
-    if (!time || !value || more) {
-      if (header_allowed && !time) {
-        header_allowed = false;
-        continue;
-      }
-      src.fail(f, fmt::format("{} = {}: {}:{}: '{}': expected a row of two numbers: time [s], value", f.path,
-                              f.node.Scalar(), path.string(), line_no, t));
-    }
-    header_allowed = false;
-    if (!w.time.empty() && !(*time > w.time.back()))
-      src.fail(f, fmt::format("{} = {}: {}:{}: time {:g} s: expected times that increase strictly", f.path,
-                              f.node.Scalar(), path.string(), line_no, *time));
-    w.time.push_back(*time);
-    w.value.push_back(*value);
-  }
-  if (w.time.size() < 2)
-    src.fail(f, fmt::format("{} = {}: '{}' has {} row(s); expected at least two rows of time [s], value", f.path,
-                            f.node.Scalar(), path.string(), w.time.size()));
-}
-
 void read_wavelet(MapReader r, const fs::path& base_dir, WaveletSpec& w) {
   const std::string type = r.choice("type", {"gaussian_derivative", "ricker", "gaussian", "table"});
   if (type == "table") {
     w.type = WaveletType::table;
     const std::string file = r.text("file", "the path of a CSV file of time [s], value, relative to the case file");
-    const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
+    const fs::path path = resolve(base_dir, file);
     w.file = path.string();
-    read_wavelet_table(r.source(), r.at("file"), path, w);
+    TimeTable table = read_table(r.source(), r.at("file"), path, TimeTableColumn{});
+    w.time = std::move(table.time);
+    w.value = std::move(table.value);
   } else {
     w.type = type == "gaussian_derivative" ? WaveletType::gaussian_derivative
              : type == "ricker"            ? WaveletType::ricker
@@ -950,9 +1077,10 @@ void read_sources(MapReader& top, const fs::path& base_dir, CaseSpec& spec) {
     s.body = r.name("body", "the name of a solid body");
     s.type = r.choice("type", {"explosion", "force"}) == "explosion" ? SourceType::explosion : SourceType::force;
     s.position = r.vec("position", point_form + " on the body");
-    s.amplitude = r.number("amplitude", any_number,
-                           s.type == SourceType::explosion ? "a number (line moment M0) [N m/m]"
-                                                           : "a number (line force F0) [N/m]");
+    s.amplitude = r.number("amplitude", magnitude_at_most(max_load),
+                           fmt::format(s.type == SourceType::explosion ? "a number in [-{0:g}, {0:g}] (line moment M0) [N m/m]"
+                                                                       : "a number in [-{0:g}, {0:g}] (line force F0) [N/m]",
+                                       max_load));
     if (s.type == SourceType::force) {
       s.direction = r.vec("direction", "a non-zero direction [x, y] of the force");
       if (!(s.direction.norm() > 0)) src.expected(r.at("direction"), "a non-zero direction [x, y] of the force");
@@ -962,8 +1090,7 @@ void read_sources(MapReader& top, const fs::path& base_dir, CaseSpec& spec) {
                                               "direction); remove it",
                                               r.path_of("direction")));
     }
-    s.radius = r.number("radius", 2 * spec.dp, positive,
-                        "a positive number (radius of the particle stencil; default 2 dp) [m]");
+    s.radius = stencil_radius(r, "radius", spec.dp);
     read_wavelet(r.map("wavelet", "a map {type: gaussian_derivative | ricker | gaussian | table, frequency, delay, file}"),
                  base_dir, s.wavelet);
     r.finish();
@@ -1026,8 +1153,8 @@ void read_receivers(MapReader r, CaseSpec& spec) {
   ReceiversSpec& rs = spec.receivers;
   rs.interval = r.optional_number("interval", positive,
                                   "a positive number (simulated time between rows of receivers.csv; default every step) [s]");
-  rs.radius = r.number("radius", 2 * spec.dp, positive,
-                       "a positive number (radius of the particle stencil; default 2 dp) [m]");
+  if (rs.interval) check_interval(r, "interval", *rs.interval, true, spec.time.end, "rows");
+  rs.radius = stencil_radius(r, "radius", spec.dp);
   std::map<std::string, std::string> names;
   const bool any = !r.empty();
   for (const Field& item : r.list("points", "a list of receivers, each {name, body, position}", any)) {
@@ -1046,8 +1173,9 @@ void read_receivers(MapReader r, CaseSpec& spec) {
   r.finish();
 }
 
-void read_output(MapReader r, OutputSpec& out) {
+void read_output(MapReader r, const Real end, OutputSpec& out) {
   out.interval = r.number("interval", out.interval, positive, "a positive number (simulated time between frames) [s]");
+  check_interval(r, "interval", out.interval, r.has("interval"), end, "frames");
   for (const Field& f : r.list("fields", "a list of field names, e.g. [pressure, velocity]", false)) {
     const std::string name = to_name(r.source(), f, "a field name (" + name_form + ")");
     if (std::find(out.fields.begin(), out.fields.end(), name) != out.fields.end())
@@ -1067,6 +1195,8 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   spec.domain = top.rect("domain", rect_form + " (particles leaving it are removed)");
   read_time(top.map("time", "a map {end, dt or cfl, dt_max} in seconds"), spec.time);
   spec.gravity = top.vec("gravity", Vec::Zero(), "a vector [gx, gy] in m/s2");
+  if (!(spec.gravity.norm() <= max_gravity))
+    src.expected(top.at("gravity"), fmt::format("a vector [gx, gy] in m/s2 of magnitude at most {:g} m/s2 (1000 g)", max_gravity));
   read_materials(top.map("materials", "a map of materials, e.g. water: {type: fluid, rho: 1000, nu: 1.0e-6}"), spec);
 
   std::map<std::string, std::string> body_and_wall_names;
@@ -1087,12 +1217,12 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.tank_motion,
                       spec.fluid);
   read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid_materials,
-                      spec.solid);
+                      spec.time.end, spec.solid);
   read_solid_loads(top, spec);
   read_sources(top, base_dir, spec);
   read_probes(top, spec);
   read_receivers(top.optional_map("receivers", "a map {interval, radius, points: [{name, body, position}, ...]}"), spec);
-  read_output(top.optional_map("output", "a map {interval, fields}"), spec.output);
+  read_output(top.optional_map("output", "a map {interval, fields}"), spec.time.end, spec.output);
   top.finish();
   return spec;
 }
@@ -1230,6 +1360,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
   std::error_code ec;
   if (!fs::is_regular_file(path, ec))
     throw CaseError(fmt::format("{}: cannot read the case file: {}", path, fs::exists(path, ec) ? "not a regular file" : "no such file"));
+  const auto size = fs::file_size(path, ec);
+  if (!ec && size > max_case_bytes)
+    throw CaseError(fmt::format("{}: cannot read the case file: it has {} bytes; expected a case file of at most {} MiB",
+                                path, size, max_case_bytes >> 20));
   std::ifstream in(path, std::ios::binary);
   if (!in.is_open()) throw CaseError(fmt::format("{}: cannot read the case file: cannot open it", path));
   std::ostringstream text;
@@ -1279,7 +1413,7 @@ const std::vector<std::string>& restart_tunable_keys() {
   static const std::vector<std::string> keys = {
       "time.cfl",       "time.dt",         "time.dt_max",         "coupling.subcycles",
       "fluid.solver",   "fluid.preconditioner", "fluid.tolerance", "fluid.max_iterations",
-      "fluid.preconditioner_rebuild_every", "solid.dt", "solid.dt_factor"};
+      "fluid.preconditioner_rebuild_every", "fluid.max_loss", "solid.dt", "solid.dt_factor"};
   return keys;
 }
 

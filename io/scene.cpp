@@ -1,4 +1,5 @@
-// Scene building from a case: lattice bodies, walls, clamps, initial motion, overlap check.
+// Scene building from a case: lattice bodies, walls, clamps, initial motion, overlap check; the particle
+// count and memory a case needs, from its rectangles alone, checked against the machine before building.
 #include "io/scene.hpp"
 
 #include "core/geometry.hpp"
@@ -7,7 +8,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 namespace mpsfsi {
 
@@ -24,7 +28,17 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   Vec centroid = Vec::Zero();
   for (const auto& x : points) centroid += x;
   centroid /= static_cast<Real>(points.size());
-  BodyCount count{b.name, is_solid ? "solid" : "fluid", points.size(), 0, 0, 0};
+  BodyCount count;
+  count.name = b.name;
+  count.kind = is_solid ? "solid" : "fluid";
+  count.n_particles = points.size();
+  // The free length is measured along the axis the clamp cuts (free_part), else along the longer side.
+  const Rect free_rect = free_part(b);
+  int free_axis = b.rect.size()[1] >= b.rect.size()[0] ? 1 : 0;
+  for (int a = 0; a < dim; ++a)
+    if (free_rect.lo[a] != b.rect.lo[a] || free_rect.hi[a] != b.rect.hi[a]) free_axis = a;
+  Vec lo = Vec::Constant(std::numeric_limits<Real>::max()), hi = -lo;
+  Real free_lo = std::numeric_limits<Real>::max(), free_hi = -free_lo;
   for (const auto& x : points) {
     const bool clamp = is_solid && b.clamp && b.clamp->contains(x);
     const Vec r = x - centroid;
@@ -32,6 +46,18 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
     const Vec v = clamp ? Vec::Zero() : Vec(b.velocity + b.angular_velocity * Vec(-r[1], r[0]));
     p.add(x, v, is_solid ? ParticleKind::solid : ParticleKind::fluid, body_index, material, clamp);
     count.n_clamped += clamp;
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+    if (!clamp) free_lo = std::min(free_lo, x[free_axis]), free_hi = std::max(free_hi, x[free_axis]);
+  }
+  const Vec half = Vec::Constant(0.5 * spec.dp);
+  count.extent = {lo - half, hi + half};
+  count.extent_difference = std::max((count.extent.lo - b.rect.lo).cwiseAbs().maxCoeff(),
+                                     (count.extent.hi - b.rect.hi).cwiseAbs().maxCoeff());
+  if (is_solid && b.clamp) {
+    count.free_axis = free_axis;
+    count.free_length = free_hi >= free_lo ? free_hi - free_lo + spec.dp : 0;
+    count.file_free_length = free_rect.size()[free_axis];
   }
   scene.counts.push_back(count);
 }
@@ -56,7 +82,10 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, Scene& scene) {
   std::vector<WallPoint> points;
   for (const auto& pt : all_points)
     if (clamped.empty() || !taken_by_clamp(p, clamped, pt.x, spec.dp)) points.push_back(pt);
-  BodyCount count{w.name, "wall", points.size(), 0, 0, 0};
+  BodyCount count;
+  count.name = w.name;
+  count.kind = "wall";
+  count.n_particles = points.size();
   for (const auto& pt : points) {
     p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
     (pt.is_wall ? count.n_wall : count.n_dummy) += 1;
@@ -83,7 +112,8 @@ void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
 
 }  // namespace
 
-Scene build_scene(const CaseSpec& spec) {
+Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& available_memory) {
+  check_scene_size(spec, available_memory);
   Scene scene;
   for (const auto& b : spec.bodies) add_body(spec, b, scene);
   for (const auto& w : spec.walls) add_wall(spec, w, scene);
@@ -91,11 +121,60 @@ Scene build_scene(const CaseSpec& spec) {
   return scene;
 }
 
-std::size_t estimate_memory_bytes(const CaseSpec& spec, const Scene& scene) {
-  const auto& p = scene.particles;
+namespace {
+
+/// Lattice cells (round(side / dp), at least 1) along each side of a rectangle.
+std::size_t cells(const Real length, const Real dp) { return static_cast<std::size_t>(lattice_cells(length, dp)); }
+
+/// Cells of a box's wall (box_walls) within `layers` layers outside its inner nx x ny cells.
+std::size_t box_cells(const std::size_t nx, const std::size_t ny, const std::size_t layers, const bool open_top) {
+  return (nx + 2 * layers) * (ny + (open_top ? 1 : 2) * layers) - nx * ny;
+}
+
+/// Cells of a block (block_walls) at most `depth` cells deep from its boundary.
+std::size_t block_cells(const std::size_t nx, const std::size_t ny, const std::size_t depth) {
+  const std::size_t core = 2 * (depth + 1);
+  return nx * ny - (nx > core ? nx - core : 0) * (ny > core ? ny - core : 0);
+}
+
+/// Bytes of one particle of a newly built scene (ParticleSet::memory_bytes, before the solvers add fields).
+std::size_t particle_bytes() {
+  ParticleSet one;
+  one.add(Vec::Zero(), Vec::Zero(), ParticleKind::fluid, 0, 0);
+  return one.memory_bytes();
+}
+
+std::string show_bytes(const double bytes) {
+  const char* const units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  double x = bytes;
+  int u = 0;
+  while (x >= 1024 && u < 6) x /= 1024, ++u;
+  return fmt::format("{:.1f} {}", x, units[u]);
+}
+
+}  // namespace
+
+ParticleCounts count_particles(const CaseSpec& spec) {
+  ParticleCounts n;
+  for (const auto& b : spec.bodies) {
+    const std::size_t cells_b = cells(b.rect.size()[0], spec.dp) * cells(b.rect.size()[1], spec.dp);
+    (b.kind == BodyKind::solid ? n.solid : n.fluid) += cells_b;
+  }
+  constexpr std::size_t n_dummy = 2;  // the default of box_walls and block_walls, which build_scene uses
+  for (const auto& w : spec.walls) {
+    const std::size_t nx = cells(w.rect.size()[0], spec.dp), ny = cells(w.rect.size()[1], spec.dp);
+    const std::size_t wall = w.type == WallType::box ? box_cells(nx, ny, 1, w.open_top) : block_cells(nx, ny, 0);
+    const std::size_t all = w.type == WallType::box ? box_cells(nx, ny, 1 + n_dummy, w.open_top) : block_cells(nx, ny, n_dummy);
+    n.wall += wall;
+    n.dummy += all - wall;
+  }
+  return n;
+}
+
+std::size_t estimate_memory_bytes(const CaseSpec& spec, const ParticleCounts& count) {
   const auto lap = lattice_constants(spec.dp, spec.fluid.re_laplacian * spec.dp);
-  const std::size_t n = p.size();
-  const std::size_t n_rows = p.n_of_kind(ParticleKind::fluid) + p.n_of_kind(ParticleKind::wall);
+  const std::size_t n = count.total();
+  const std::size_t n_rows = count.fluid + count.wall;
   const std::size_t nnz = n_rows * static_cast<std::size_t>(lap.n_neighbours + 1);
   // Particles (+ about 10 extra fields), one neighbour list at the largest radius,
   // the pressure matrix (values + column indices) and a preconditioner of similar size.
@@ -105,11 +184,53 @@ std::size_t estimate_memory_bytes(const CaseSpec& spec, const Scene& scene) {
   // The solid (solid/solid_solver.cpp): per particle about 300 bytes of state and contact scratch, per bond
   // (each pair once, half the neighbours within solid.re) about 85 bytes: reference vector, weights, index,
   // volumetric-strain weights, intact flag, scratch (checked against lamb_a: docs/performance.md, ## Lamb's problem).
-  const std::size_t n_solid = p.n_of_kind(ParticleKind::solid);
   const auto bonds = lattice_constants(spec.dp, spec.solid.re * spec.dp);
-  const std::size_t solid = n_solid * (300 + static_cast<std::size_t>(bonds.n_neighbours) / 2 * 85);
+  const std::size_t solid = count.solid * (300 + static_cast<std::size_t>(bonds.n_neighbours) / 2 * 85);
   // The run loop keeps a copy of the particle set as the last good frame (written if the run fails).
-  return 2 * p.memory_bytes() + fields + neighbours + 3 * matrix + solid;
+  return 2 * n * particle_bytes() + fields + neighbours + 3 * matrix + solid;
+}
+
+std::size_t estimate_memory_bytes(const CaseSpec& spec, const Scene& scene) {
+  const auto& p = scene.particles;
+  return estimate_memory_bytes(spec, ParticleCounts{p.n_of_kind(ParticleKind::fluid), p.n_of_kind(ParticleKind::solid),
+                                                    p.n_of_kind(ParticleKind::wall), p.n_of_kind(ParticleKind::dummy)});
+}
+
+std::optional<std::size_t> available_memory_bytes() {
+  std::ifstream in("/proc/meminfo");
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string key, unit;
+    double kib = 0;
+    if (s >> key >> kib >> unit && key == "MemAvailable:" && unit == "kB" && kib >= 0)
+      return static_cast<std::size_t>(kib * 1024);
+  }
+  return std::nullopt;
+}
+
+void check_scene_size(const CaseSpec& spec, const std::optional<std::size_t>& available) {
+  // Counted in floating point first: the counts of an absurd dp overflow no integer here.
+  double cells_total = 0;
+  for (const auto& b : spec.bodies) cells_total += std::round(b.rect.size()[0] / spec.dp) * std::round(b.rect.size()[1] / spec.dp);
+  for (const auto& w : spec.walls)
+    cells_total += 6 * (std::round(w.rect.size()[0] / spec.dp) + std::round(w.rect.size()[1] / spec.dp) + 6);
+  const auto too_many = [&](const double n) {
+    return CaseError(fmt::format("{}: dp = {:g}: the case would have about {:.3g} particles; expected at most {:g} (a "
+                                 "larger dp)",
+                                 spec.file, spec.dp, n, max_scene_particles));
+  };
+  if (!(cells_total <= max_scene_particles)) throw too_many(cells_total);
+  const ParticleCounts n = count_particles(spec);
+  if (static_cast<double>(n.total()) > max_scene_particles) throw too_many(static_cast<double>(n.total()));
+  if (!available) return;
+  const double need = static_cast<double>(estimate_memory_bytes(spec, n)) + static_cast<double>(program_bytes);
+  if (need > static_cast<double>(*available))
+    throw CaseError(fmt::format("{}: dp = {:g}: the case would have {} particles ({} fluid, {} solid, {} wall, {} dummy) "
+                                "and need about {} of memory, but this machine has {} available (MemAvailable in "
+                                "/proc/meminfo); expected a case that fits: a larger dp or smaller bodies and walls",
+                                spec.file, spec.dp, n.total(), n.fluid, n.solid, n.wall, n.dummy, show_bytes(need),
+                                show_bytes(static_cast<double>(*available))));
 }
 
 }  // namespace mpsfsi

@@ -9,7 +9,7 @@
 
 namespace mpsfsi {
 
-/// The tank motion of a case; a table is read from spec.file (throws std::runtime_error if unreadable).
+/// The tank motion of a case; a table is the one read and checked when the case was parsed.
 inline TankMotion make_tank_motion(const TankMotionSpec& spec) {
   TankMotionParams q;
   q.pivot = spec.pivot;
@@ -22,7 +22,8 @@ inline TankMotion make_tank_motion(const TankMotionSpec& spec) {
       break;
     case TankMotionType::table:
       q.type = TankMotionParams::Type::table;
-      read_angle_table(spec.file, q);
+      q.time = spec.time;
+      q.angle = spec.angle;
       break;
   }
   return TankMotion(std::move(q));

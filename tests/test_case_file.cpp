@@ -2,6 +2,7 @@
 // kind of bad input gives a CaseError naming file, line, key and expected form, --set overrides,
 // and a fuzz test (mutated case files either parse or throw CaseError, nothing else).
 #include "io/case.hpp"
+#include "io/scene.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -16,6 +17,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <sys/stat.h>
 
 using namespace mpsfsi;
 using ::testing::HasSubstr;
@@ -208,7 +211,7 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_DOUBLE_EQ(c.coupling.solid_damping, 0.5);
   EXPECT_DOUBLE_EQ(c.coupling.load_relaxation, 1.0);
   EXPECT_EQ(c.fluid.solver, "cg");
-  EXPECT_EQ(c.fluid.preconditioner, "muelu");
+  EXPECT_EQ(c.fluid.preconditioner, "ssor");
   EXPECT_EQ(c.fluid.preconditioner_rebuild_every, 1);
   EXPECT_DOUBLE_EQ(c.fluid.density_tolerance, 1e-6);
   EXPECT_DOUBLE_EQ(c.fluid.re_laplacian, 4.0);
@@ -358,9 +361,9 @@ TEST(CaseFileErrors, OutOfRangeValues) {
   EXPECT_THAT(error_of(valid_with("amplitude_deg: 4", "amplitude_deg: 95")),
               HasSubstr("tank_motion.amplitude_deg = 95: expected a number of degrees in (0, 90)"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: 0")),
-              HasSubstr("coupling.subcycles = 0: expected a positive integer or auto"));
+              HasSubstr("coupling.subcycles = 0: expected a positive integer up to 100000 or auto"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: 2.5")),
-              HasSubstr("coupling.subcycles = 2.5: expected a positive integer or auto"));
+              HasSubstr("coupling.subcycles = 2.5: expected a positive integer up to 100000 or auto"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, solid_damping: -1")),
               HasSubstr("coupling.solid_damping = -1: expected a number >= 0"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, load_relaxation: 0")),
@@ -524,7 +527,7 @@ TEST(CaseFile, WaveletTableIsReadRelativeToTheCaseFile) {
   fs::remove_all(dir);
   // parse_case resolves relative to the current directory, where there is no stf.csv.
   EXPECT_THAT(error_of(text), HasSubstr(at_line(text, "wavelet: {type: table") +
-                                        " sources[0].wavelet.file = stf.csv: cannot read './stf.csv'; expected a CSV file"));
+                                        " sources[0].wavelet.file = stf.csv: no such file './stf.csv'; expected a CSV file"));
 }
 
 TEST(CaseFileErrors, Sources) {
@@ -823,4 +826,276 @@ TEST(CaseFile, LateralWallFriction) {
   EXPECT_THAT(error_of(minimal_case + std::string("fluid: {lateral_walls: {gap: 0.01}}\n")),
               HasSubstr("missing key 'frequency' in fluid.lateral_walls; expected: fluid.lateral_walls.frequency, a "
                         "positive number [Hz]"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tables, sizes and bounds (issue 13): input that used to block, run out of memory, take minutes or reach
+// the run before it failed is refused when the case is read, with the key and the expected form.
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A folder of its own under the system's temporary folder, removed at the end of the test.
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name) : path(fs::temp_directory_path() / name) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+/// The valid case with a wavelet table `file`, written to dir/case.yaml.
+std::string wavelet_case(const fs::path& dir, const std::string& file) {
+  const std::string text = valid_with("wavelet: {type: ricker, frequency: 50, delay: 0.03}", "wavelet: {type: table, file: " + file + "}");
+  std::ofstream(dir / "case.yaml") << text;
+  return (dir / "case.yaml").string();
+}
+
+/// The valid case with a tank-motion table `file`, written to dir/case.yaml.
+std::string table_motion_case(const fs::path& dir, const std::string& file) {
+  const std::string text = valid_with("  type: sine_roll\n  pivot: [0.3, 0]\n  amplitude_deg: 4\n  period: 1.2\n",
+                                      "  type: table\n  pivot: [0.3, 0]\n  file: " + file + "\n");
+  std::ofstream(dir / "case.yaml") << text;
+  return (dir / "case.yaml").string();
+}
+
+std::string load_error(const std::string& path, const std::vector<std::string>& overrides = {}) {
+  try {
+    load_case(path, overrides);
+  } catch (const CaseError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+// A FIFO used to block `check` forever and /dev/zero to read until memory ran out; a huge file was read whole.
+TEST(CaseFileTables, OnlyRegularFilesOfBoundedSize) {
+  const TempDir dir("mpsfsi_test_case_file_special");
+  const fs::path fifo = dir.path / "stf.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const auto& make : {wavelet_case, table_motion_case}) {
+    const std::string key = make == wavelet_case ? "sources[0].wavelet.file" : "tank_motion.file";
+    EXPECT_THAT(load_error(make(dir.path, fifo.string())),
+                HasSubstr(key + " = " + fifo.string() + ": '" + fifo.string() + "' is not a regular file (a FIFO); expected a CSV file of time [s]"));
+    EXPECT_THAT(load_error(make(dir.path, "/dev/zero")),
+                HasSubstr(key + " = /dev/zero: '/dev/zero' is not a regular file (a device, socket or other special file)"));
+    EXPECT_THAT(load_error(make(dir.path, dir.path.string())), HasSubstr("is not a regular file (a directory)"));
+  }
+  // Over 16 MiB (a sparse file: nothing is written).
+  std::ofstream(dir.path / "big.csv") << "0,0\n1,1\n";
+  fs::resize_file(dir.path / "big.csv", (16u << 20) + 1);
+  EXPECT_THAT(load_error(wavelet_case(dir.path, "big.csv")),
+              HasSubstr("sources[0].wavelet.file = big.csv: '" + (dir.path / "big.csv").string() + "' has 16777217 bytes; expected a table file of at most 16 MiB"));
+  // More than a million rows (within 16 MiB).
+  {
+    std::ofstream many(dir.path / "many.csv");
+    for (int k = 0; k <= 1000000; ++k) many << k << ",0\n";
+  }
+  EXPECT_THAT(load_error(table_motion_case(dir.path, "many.csv")),
+              HasSubstr((dir.path / "many.csv").string() + ":1000001: more than 1000000 rows; expected at most 1000000 rows of time [s], angle [deg]"));
+  // The case file itself.
+  std::ofstream(dir.path / "huge.yaml") << "name: x\n";
+  fs::resize_file(dir.path / "huge.yaml", (16u << 20) + 1);
+  EXPECT_THAT(load_error((dir.path / "huge.yaml").string()), HasSubstr("cannot read the case file: it has 16777217 bytes; expected a case file of at most 16 MiB"));
+  EXPECT_THAT(load_error(fifo.string()), HasSubstr("cannot read the case file: not a regular file"));
+}
+
+// The tank-motion table was read only by the run, which skipped rows it could not read and then said "needs
+// at least two rows" of a three-row file (exit 1). Now the case reader reads it, with the wavelets' reader.
+TEST(CaseFileTables, TankMotionTableIsCheckedWhenTheCaseIsRead) {
+  const TempDir dir("mpsfsi_test_case_file_motion");
+  const std::string case_path = table_motion_case(dir.path, "roll.csv");
+  const std::string csv = (dir.path / "roll.csv").string();
+  const auto error = [&](const std::string& rows) {
+    std::ofstream(dir.path / "roll.csv") << rows;
+    return load_error(case_path);
+  };
+  const std::string key = "tank_motion.file = roll.csv: ";
+  EXPECT_THAT(error("0;0\n0.5;1\n1;0\n"), HasSubstr(key + csv + ":2: '0.5;1': expected a row of two numbers: time [s], angle [deg]"));
+  EXPECT_THAT(error("0,0\n1,nan\n2,0\n"), HasSubstr(key + csv + ":2: '1,nan': expected a row of two numbers"));
+  EXPECT_THAT(error("0,0\n1,1\n0.5,2\n"), HasSubstr(key + csv + ":3: time 0.5 s: expected times that increase strictly"));
+  EXPECT_THAT(error("0,0\n"), HasSubstr(key + "'" + csv + "' has 1 row(s); expected at least two rows of time [s], angle [deg]"));
+  EXPECT_THAT(error("0,0\n1,95\n"), HasSubstr(key + csv + ":2: angle [deg] = 95: expected an angle in (-90, 90) degrees"));
+  EXPECT_THAT(error("0,0\n1,2,3\n"), HasSubstr(csv + ":2: '1,2,3': expected a row of two numbers"));
+  std::ofstream(dir.path / "passwd") << "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n";
+  EXPECT_THAT(load_error(table_motion_case(dir.path, "passwd")),
+              HasSubstr("tank_motion.file = passwd: " + (dir.path / "passwd").string() + ":2: 'daemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin': expected a row of two numbers"));
+
+  // A good table is kept in the case (angles in radians): the run uses it and does not read the file again.
+  std::ofstream(dir.path / "roll.csv") << "# roll\ntime, angle\n0, 0\n0.5, 2\n1.0 -4\n";
+  const CaseSpec c = load_case(table_motion_case(dir.path, "roll.csv"));
+  EXPECT_EQ(c.tank_motion.time, (std::vector<Real>{0, 0.5, 1.0}));
+  ASSERT_EQ(c.tank_motion.angle.size(), 3u);
+  EXPECT_NEAR(c.tank_motion.angle[1], 2 * deg, 1e-15);
+  EXPECT_NEAR(c.tank_motion.angle[2], -4 * deg, 1e-15);
+}
+
+// --set fluid.re_laplacian=1e6 made `check` run for minutes (about 3e12 neighbours per particle).
+TEST(CaseFileErrors, RadiiAreBounded) {
+  EXPECT_THAT(error_of(valid_text(), {"fluid.re_laplacian=1e6"}),
+              HasSubstr("fluid.re_laplacian = 1e6: about pi re^2 = 3.1e+12 neighbours per particle; expected a number in "
+                        "(1, 10] (effective radius of the Laplacian, in units of dp)"));
+  EXPECT_THAT(error_of(valid_text(), {"fluid.re_gradient=10.5"}), HasSubstr("fluid.re_gradient = 10.5: about pi re^2 = 3.5e+02 neighbours"));
+  EXPECT_THAT(error_of(valid_text(), {"fluid.re_gradient=1"}), HasSubstr("fluid.re_gradient = 1: expected a number in (1, 10]"));
+  EXPECT_THAT(error_of(valid_text(), {"solid.re=40"}), HasSubstr("solid.re = 40: about pi re^2 = 5e+03 neighbours per particle; expected a number in (1, 10] (effective radius of the bonds"));
+  EXPECT_THAT(error_of(valid_text(), {"sources.tap.radius=1"}),
+              HasSubstr("sources[0].radius = 1: 250 dp, about 2e+05 particles in the stencil; expected a radius of at most 10 dp = 0.04 m (dp = 0.004 m)"));
+  EXPECT_THAT(error_of(valid_text(), {"receivers.radius=0.041"}), HasSubstr("receivers.radius = 0.041: 10.2 dp"));
+  EXPECT_EQ(error_of(valid_text(), {"fluid.re_laplacian=10", "solid.re=10", "receivers.radius=0.04"}), "(no error)");
+}
+
+// output.interval = 1e-300 hung a run; so would the same receivers.interval; time steps are bounded too.
+TEST(CaseFileErrors, IntervalsAndTimeStepsAreBounded) {
+  EXPECT_THAT(error_of(valid_text(), {"output.interval=1e-300"}),
+              HasSubstr("output.interval = 1e-300: expected an interval of at least 1e-06 s (at least 1e-09 s, and at most "
+                        "1e+06 frames up to time.end = 1 s) [s]"));
+  EXPECT_THAT(error_of(valid_text(), {"output.interval=1e-25"}), HasSubstr("output.interval = 1e-25: expected an interval of at least 1e-06 s"));
+  EXPECT_THAT(error_of(valid_text(), {"time.end=1e-6", "output.interval=1e-10"}),
+              HasSubstr("output.interval = 1e-10: expected an interval of at least 1e-09 s"));
+  // The default interval (0.01 s) is too short for a very long end time.
+  EXPECT_THAT(error_of(minimal_case, {"time.end=1e5"}),
+              HasSubstr("output.interval = 0.01 (default): expected an interval of at least 0.1 s"));
+  EXPECT_THAT(error_of(valid_text(), {"receivers.interval=1e-300"}),
+              HasSubstr("receivers.interval = 1e-300: expected an interval of at least 1e-06 s (at least 1e-09 s, and at "
+                        "most 1e+06 rows up to time.end = 1 s) [s]"));
+  EXPECT_THAT(error_of(minimal_case, {"time.dt=1e-13"}),
+              HasSubstr("time.dt = 1e-13: expected a time step of at least 5e-10 s (at least 1e-12 s, and at most 1e+09 "
+                        "steps up to time.end = 0.5 s) [s]"));
+  EXPECT_THAT(error_of(valid_text(), {"time.dt_max=1e-300"}), HasSubstr("time.dt_max = 1e-300: expected a time step of at least 1e-12 s"));
+  EXPECT_THAT(error_of(valid_text(), {"solid.dt=1e-15"}), HasSubstr("solid.dt = 1e-15: expected a time step of at least 1e-09 s"));
+  EXPECT_THAT(error_of(valid_text(), {"coupling.subcycles=100001"}),
+              HasSubstr("coupling.subcycles = 100001: expected a positive integer up to 100000 or auto"));
+  EXPECT_EQ(error_of(valid_text(), {"coupling.subcycles=100000", "output.interval=1e-6", "receivers.interval=1e-6"}), "(no error)");
+}
+
+// gravity: [1e300, 1e300] and other huge numbers overflowed in the run.
+TEST(CaseFileErrors, MagnitudesAreBounded) {
+  EXPECT_THAT(error_of(valid_text(), {"gravity=[1e300, 1e300]"}),
+              HasSubstr("gravity = [1e300, 1e300]: expected a vector [gx, gy] in m/s2 of magnitude at most 10000 m/s2 (1000 g)"));
+  EXPECT_THAT(error_of(valid_text(), {"bodies.column.velocity=[0, -2e4]"}),
+              HasSubstr("bodies[0].velocity = [0, -2e4]: expected an initial velocity [vx, vy] in m/s of magnitude at most 10000 m/s"));
+  EXPECT_THAT(error_of(valid_text(), {"bodies.plate.angular_velocity=1e300"}),
+              HasSubstr("bodies[1].angular_velocity = 1e300: expected a number in [-10000, 10000] (initial angular velocity) [rad/s]"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.water.rho=1e300"}), HasSubstr("materials.water.rho = 1e300: expected a number in [0.001, 100000] (density) [kg/m3]"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.water.c=1e-300"}), HasSubstr("materials.water.c = 1e-300: expected a number in [0.001, 100000] (sound speed"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.water.nu=1e300"}), HasSubstr("materials.water.nu = 1e300: expected a number in [0, 10000] (kinematic viscosity)"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.rubber.E=1e300"}), HasSubstr("materials.rubber.E = 1e300: expected a number in [0.001, 1e+13] (Young's modulus) [Pa]"));
+  EXPECT_THAT(error_of(valid_text(), {"materials.rubber.rho=1e-300"}), HasSubstr("materials.rubber.rho = 1e-300: expected a number in [0.001, 100000]"));
+  EXPECT_THAT(error_of(valid_with("E: 1.2e7, nu: 0.4", "vp: 1e300, vs: 50")), HasSubstr("materials.rubber.vp = 1e300: expected a number in [0.001, 100000] (P-wave speed"));
+  EXPECT_THAT(error_of(valid_text(), {"tank_motion.period=1e-300"}), HasSubstr("tank_motion.period = 1e-300: expected a roll period of at least 0.001 s"));
+  EXPECT_THAT(error_of(valid_text(), {"solid_loads.push.peak=1e300"}), HasSubstr("solid_loads[0].peak = 1e300: expected a number in [-1e+13, 1e+13] (peak pressure) [Pa]"));
+  EXPECT_THAT(error_of(valid_text(), {"sources.tap.amplitude=-1e300"}), HasSubstr("sources[0].amplitude = -1e300: expected a number in [-1e+13, 1e+13] (line force F0) [N/m]"));
+  EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 1e-300}")),
+              HasSubstr("fluid.lateral_walls.gap = 1e-300: expected a gap of at least 1e-06 m"));
+}
+
+// An invalid UTF-8 description went into case.resolved.yaml, which YAML readers then refused; a 300-character
+// name made creating the output folder fail with a raw filesystem error.
+TEST(CaseFileErrors, TextIsUtf8AndNamesAreShort) {
+  EXPECT_THAT(error_of(valid_with("Water column", "Water \xff column")),
+              HasSubstr("description: the text is not valid UTF-8 (byte 0xff at position 7); expected a one-line description "
+                        "of the case, as UTF-8 text"));
+  EXPECT_THAT(error_of(valid_with("Made-up", "Made\xc3-up")), HasSubstr("source: the text is not valid UTF-8 (byte 0xc3 at position 5)"));
+  EXPECT_THAT(error_of(valid_with("Made-up", "Made\xed\xa0\x80-up")), HasSubstr("source: the text is not valid UTF-8"));  // a surrogate
+  EXPECT_THAT(error_of(valid_with("Made-up", "Made\xc0\xaf-up")), HasSubstr("source: the text is not valid UTF-8"));  // overlong '/'
+  EXPECT_THAT(error_of(valid_text(), {"description=caf\xe9"}), HasSubstr("(--set description=caf\xe9): description: the text is not valid UTF-8"));
+  EXPECT_EQ(error_of(valid_with("Water column", "Wasser \xc3\xa4 \xe2\x82\xac \xf0\x9f\x8c\x8a column")), "(no error)");
+
+  const std::string long_name(65, 'a');
+  EXPECT_THAT(error_of(valid_with("name: test_case", "name: " + long_name)),
+              HasSubstr("name = " + long_name.substr(0, 57) + "...: expected the case name: a name of at most 64 letters"));
+  EXPECT_THAT(error_of(valid_with("name: plate", "name: " + long_name)), HasSubstr("bodies[1].name = aaaa"));
+  EXPECT_THAT(error_of(valid_with("water:", long_name + ":")), HasSubstr("material name '" + long_name + "': expected a name of at most 64"));
+  EXPECT_EQ(error_of(valid_with("name: test_case", "name: " + std::string(64, 'a'))), "(no error)");
+}
+
+TEST(CaseFile, MaxLoss) {
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name).fluid.max_loss, 0.05);
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name, {"fluid.max_loss=0.2"}).fluid.max_loss, 0.2);
+  EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name, {"fluid.max_loss=0"}).fluid.max_loss, 0.0);
+  EXPECT_THAT(error_of(minimal_case, {"fluid.max_loss=1.5"}),
+              HasSubstr("fluid.max_loss = 1.5: expected a number in [0, 1] (largest share of a fluid body's particles that "
+                        "may leave the domain before the run stops)"));
+  EXPECT_THAT(error_of(minimal_case, {"fluid.max_loss=-0.1"}), HasSubstr("fluid.max_loss = -0.1: expected a number in [0, 1]"));
+  EXPECT_TRUE(key_under("fluid.max_loss", restart_tunable_keys()));
+}
+
+// dp 1e-5 for the dam break ended in std::bad_alloc (exit 1): the particle count and the memory are
+// estimated from the rectangles and checked before build_scene allocates.
+TEST(Scene, ParticleCountFromTheRectanglesMatchesTheScene) {
+  const std::string cases = std::string(MPSFSI_TEST_DATA_DIR) + "/../../cases/";
+  for (const std::string name : {"dam_break", "dam_break_obstacle", "hydrostatic", "cantilever", "collision_fracture",
+                                 "sloshing_high", "dam_break_elastic_plate"}) {
+    const CaseSpec spec = load_case(cases + name + ".yaml");
+    const ParticleCounts n = count_particles(spec);
+    const Scene scene = build_scene(spec);
+    const auto& p = scene.particles;
+    EXPECT_EQ(n.fluid, p.n_of_kind(ParticleKind::fluid)) << name;
+    EXPECT_EQ(n.solid, p.n_of_kind(ParticleKind::solid)) << name;
+    // Wall points next to clamped particles embedded in a wall give way (io/scene.cpp): a few fewer.
+    std::size_t clamped = 0;
+    for (const auto& c : scene.counts) clamped += c.n_clamped;
+    EXPECT_GE(n.wall + n.dummy, p.n_of_kind(ParticleKind::wall) + p.n_of_kind(ParticleKind::dummy)) << name;
+    EXPECT_LE(n.wall + n.dummy, p.n_of_kind(ParticleKind::wall) + p.n_of_kind(ParticleKind::dummy) + clamped) << name;
+    if (clamped == 0) {
+      EXPECT_EQ(n.wall, p.n_of_kind(ParticleKind::wall)) << name;
+      EXPECT_EQ(n.dummy, p.n_of_kind(ParticleKind::dummy)) << name;
+      EXPECT_EQ(estimate_memory_bytes(spec, n), estimate_memory_bytes(spec, scene)) << name;
+    }
+  }
+}
+
+TEST(Scene, TooLargeForTheMachineIsRefusedBeforeAllocating) {
+  const std::string dam_break = std::string(MPSFSI_TEST_DATA_DIR) + "/../../cases/dam_break.yaml";
+  const CaseSpec spec = load_case(dam_break, {"dp=1e-5"});
+  try {
+    build_scene(spec);  // would need about 780 GiB
+    FAIL() << "no error";
+  } catch (const CaseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(dam_break + ": dp = 1e-05: the case would have 426845618 particles (426320000 fluid, 0 "
+                                    "solid, 175202 wall, 350416 dummy) and need about "));
+    EXPECT_THAT(e.what(), HasSubstr("available (MemAvailable in /proc/meminfo); expected a case that fits: a larger dp"));
+  }
+  // The same check with a given available memory: the case at its own dp needs about 90 MiB.
+  const CaseSpec normal = load_case(dam_break);
+  EXPECT_NO_THROW(check_scene_size(normal, std::size_t{1} << 30));
+  EXPECT_NO_THROW(check_scene_size(normal, std::nullopt));
+  EXPECT_THROW(check_scene_size(normal, std::size_t{64} << 20), CaseError);
+  // Above the hard bound whatever the memory.
+  CaseSpec huge = normal;
+  huge.dp = 1e-6;
+  EXPECT_THAT([&] {
+    try {
+      check_scene_size(huge, std::nullopt);
+    } catch (const CaseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  }(), HasSubstr("dp = 1e-06: the case would have about 4.26e+10 particles; expected at most 1e+09 (a larger dp)"));
+  EXPECT_TRUE(available_memory_bytes().has_value());
+}
+
+// A 0.16 m body came out 0.16025 m: build_scene gives the extent the particles represent, and for clamped
+// solids the free length, which `check` prints (and warns about beyond dp/4).
+TEST(Scene, ExtentsAndFreeLength) {
+  const CaseSpec spec = parse_case(valid_text(), file_name, {"bodies.column.rectangle={min: [0, 0], max: [0.1625, 0.4]}"});
+  const Scene scene = build_scene(spec);
+  const BodyCount& column = scene.counts[0];
+  EXPECT_NEAR(column.extent.lo[0], 0, 1e-12);
+  EXPECT_NEAR(column.extent.hi[0], 0.164, 1e-12);  // round(0.1625 / 0.004) = 41 particles
+  EXPECT_NEAR(column.extent.hi[1], 0.4, 1e-12);
+  EXPECT_NEAR(column.extent_difference, 0.0015, 1e-12);
+  EXPECT_FALSE(column.free_length);
+  // The plate: 0.012 x 0.18 m, clamped over its lowest 0.012 m: free length 0.168 m along y.
+  const BodyCount& plate = scene.counts[1];
+  EXPECT_NEAR(plate.extent_difference, 0, 1e-12);
+  ASSERT_TRUE(plate.free_length);
+  EXPECT_EQ(plate.free_axis, 1);
+  EXPECT_NEAR(*plate.free_length, 0.168, 1e-12);
+  EXPECT_NEAR(plate.file_free_length, 0.168, 1e-12);
+  EXPECT_EQ(scene.counts[2].kind, "wall");
 }

@@ -32,6 +32,11 @@ add_test(NAME cli_mpi_input_error_printed_once
          COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml|--set|dp=0"
                  -DCODE=2 "-DREGEX=dp = 0: expected a positive number" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
 set_tests_properties(cli_mpi_input_error_printed_once PROPERTIES LABELS mpi)
+# All ranks take the same decision on the memory (the smallest MemAvailable of any rank): one message, exit 2.
+add_test(NAME cli_mpi_memory_refused_on_every_rank
+         COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml|--dp|1e-5"
+                 -DCODE=2 "-DREGEX=dp = 1e-05: the case would have" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
+set_tests_properties(cli_mpi_memory_refused_on_every_rank PROPERTIES LABELS mpi)
 
 # Failure handling (issue 7): each kind is provoked and must give its diagnosis and a non-zero exit.
 set(db ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml)
@@ -86,3 +91,34 @@ if(Python3_Interpreter_FOUND)
                    ${PROJECT_SOURCE_DIR}/cases ${CMAKE_CURRENT_BINARY_DIR}/cli_run_outputs)
   set_tests_properties(cli_run_outputs PROPERTIES LABELS unit TIMEOUT 300)
 endif()
+
+# Issue 13: input that blocked `check`, ran it out of memory, made it take minutes, hung a run or reached the
+# run before failing there is refused by `check` (exit 2) with the key and the expected form.
+set(lamb ${PROJECT_SOURCE_DIR}/cases/lamb_a.yaml)
+set(measured ${PROJECT_SOURCE_DIR}/cases/sloshing_high_measured.yaml)
+mpsfsi_cli_test(table_from_a_device 2 "sources\\[0\\]\\.wavelet\\.file = /dev/zero: '/dev/zero' is not a regular file"
+  check ${lamb} --set "sources.0.wavelet={type: table, file: /dev/zero}")
+mpsfsi_cli_test(tank_table_from_a_device 2 "tank_motion\\.file = /dev/zero: '/dev/zero' is not a regular file"
+  check ${measured} --set tank_motion.file=/dev/zero)
+mpsfsi_cli_test(tank_table_rows_checked_before_the_run 2
+  "tank_motion\\.file = .*roll_semicolons\\.csv: .*roll_semicolons\\.csv:3: '0\\.5;1': expected a row of two numbers: time \\[s\\], angle \\[deg\\]"
+  run ${measured} --quiet --overwrite --output ${run_dir}/semicolons --end-time 0.01 --set tank_motion.file=${bad}/roll_semicolons.csv)
+mpsfsi_cli_test(huge_effective_radius 2
+  "fluid\\.re_laplacian = 1e6: about pi re\\^2 = 3\\.1e\\+12 neighbours per particle; expected a number in \\(1, 10\\]"
+  check ${db} --set fluid.re_laplacian=1e6)
+mpsfsi_cli_test(dp_too_small_for_the_memory 2
+  "dam_break\\.yaml: dp = 1e-05: the case would have 426845618 particles .* and need about [0-9.]+ GiB of memory, but this machine has"
+  check ${db} --dp 1e-5)
+mpsfsi_cli_test(tiny_output_interval 2 "output\\.interval = 1e-300: expected an interval of at least 1e-06 s"
+  check ${db} --set output.interval=1e-300)
+mpsfsi_cli_test(tiny_time_step 2 "time\\.dt_max = 1e-300: expected a time step of at least 1e-12 s" check ${db} --set time.dt_max=1e-300)
+mpsfsi_cli_test(huge_gravity 2 "gravity = \\[1e300, 1e300\\]: expected a vector \\[gx, gy\\] in m/s2 of magnitude at most 10000"
+  check ${db} --set "gravity=[1e300, 1e300]")
+string(REPEAT "a" 300 long_name)
+mpsfsi_cli_test(long_case_name 2 "name = a+\\.\\.\\.: expected the case name: a name of at most 64 letters" check ${db} --set name=${long_name})
+# `check` prints the extent the particles represent and warns (exit 0) when it misses the rectangle by > dp/4.
+mpsfsi_cli_test(body_extent_warning 0
+  "column +\\[0, 0\\.164\\] x \\[0, 0\\.292\\] m.*warning: body 'column' is represented by \\[0, 0\\.164\\] x \\[0, 0\\.292\\] m \\(0\\.164 x 0\\.292 m\\), not by its rectangle \\[0, 0\\.1625\\]"
+  check ${db} --set "bodies.column.rectangle={min: [0, 0], max: [0.1625, 0.292]}")
+mpsfsi_cli_test(clamped_free_length 0 "plate +\\[0\\.292, 0\\.304\\] x \\[-0\\.009, 0\\.081\\] m .*; free length 0\\.081 m along y \\(file: 0\\.08 m\\)"
+  check ${PROJECT_SOURCE_DIR}/cases/dam_break_elastic_plate.yaml)
