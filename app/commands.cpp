@@ -33,14 +33,23 @@ std::vector<std::string> RunOptions::all_overrides() const {
   return o;
 }
 
-int command_check(const RunOptions& opts) {
-  const CaseSpec spec = load_case(opts.case_file, opts.all_overrides());
-  // Under mpirun every rank checks: all must take the same decision on the memory, so they compare the case
-  // with the smallest MemAvailable any of them read (otherwise one rank could stop and the others go on).
+namespace {
+
+/// The scene of a case, built on every rank. Under mpirun all ranks must take the same decision on the
+/// memory, so they compare the case with the smallest MemAvailable any of them read (otherwise one rank
+/// could stop and the others go on and wait for it).
+Scene build_scene_on_every_rank(const CaseSpec& spec) {
   unsigned long long available = available_memory_bytes().value_or(ULLONG_MAX);
   MPI_Allreduce(MPI_IN_PLACE, &available, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
-  const Scene scene = build_scene(spec, available == ULLONG_MAX ? std::nullopt
-                                                                : std::optional<std::size_t>(static_cast<std::size_t>(available)));
+  return build_scene(spec, available == ULLONG_MAX ? std::nullopt
+                                                   : std::optional<std::size_t>(static_cast<std::size_t>(available)));
+}
+
+}  // namespace
+
+int command_check(const RunOptions& opts) {
+  const CaseSpec spec = load_case(opts.case_file, opts.all_overrides());
+  const Scene scene = build_scene_on_every_rank(spec);
   const auto& p = scene.particles;
   fmt::print("case {} ({}): dp = {:g} m, end time {:g} s\n", spec.name, spec.file, spec.dp, spec.time.end);
   fmt::print("{:<20} {:<6} {:>10} {:>10} {:>10} {:>10}\n", "body", "kind", "particles", "wall", "dummy", "clamped");
@@ -76,6 +85,7 @@ int command_check(const RunOptions& opts) {
   const double mib = static_cast<double>(estimate_memory_bytes(spec, scene)) / (1024.0 * 1024.0);
   fmt::print("memory estimate: {:.1f} MiB of data, about {:.0f} MiB with the program\n", mib,
              mib + static_cast<double>(program_bytes) / (1024.0 * 1024.0));
+  fmt::print("{}\n", project_run(spec, p).text());
   if (!opts.output.empty()) {
     VtkSeriesWriter writer(opts.output, "particles");
     const auto path = writer.write(p, 0.0);
@@ -158,7 +168,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
   else if (opts.case_file.empty()) throw CaseError("run: a case file is required (or --restart CHECKPOINT)");
   std::string note;
   const CaseSpec spec = ck ? restart_case(opts, *ck, note) : load_case(opts.case_file, opts.all_overrides());
-  Scene scene = build_scene(spec);
+  Scene scene = build_scene_on_every_rank(spec);
   std::string out = opts.output;
   if (out.empty()) {
     const std::string ck_dir = ck ? fs::path(ck->path).parent_path().string() : std::string();

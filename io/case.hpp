@@ -145,9 +145,8 @@ struct FluidNumerics {
   Real density_tolerance = 1e-6;
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between
-  /// The largest share of a fluid body's particles that may leave the domain before the run stops (exit 3).
-  Real max_loss = 0.05;
   LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
+  /// The largest share of a fluid body's particles that may leave the domain before the run stops (exit 3).
   Real max_loss = 0.05;
 };
 

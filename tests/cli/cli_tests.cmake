@@ -61,6 +61,10 @@ set_tests_properties(cli_mpi_fluid_lost_stops_the_run PROPERTIES LABELS mpi)
 mpsfsi_cli_test(huge_dt_max_first_step_limited_by_gravity 0 "dt 9.03e-03 s \\(acceleration\\)"
   run ${db} --overwrite --output ${run_dir}/huge_dt_max --end-time 0.01 --set time.dt_max=1e10)
 
+# `check` projects the steps of a run and warns when they cannot finish (water 1e9 times as viscous: dt 3.2e-9 s).
+mpsfsi_cli_test(check_projection_warns 0 "projection: 3.12e\\+08 steps of dt = 3.2e-09 s \\(viscous\\).*warning: .* cannot finish in any sensible time"
+  check ${db} --set materials.water.nu=1e3)
+
 # Command-line values that are refused (exit 2) rather than taken as defaults or as nothing.
 mpsfsi_cli_test(checkpoint_every_nan 2 "--checkpoint-every.*'nan': expected a positive, finite number"
   run ${db} --output ${run_dir}/ck_nan --checkpoint-every nan)
