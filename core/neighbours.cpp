@@ -32,11 +32,10 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size) {
     n_cells_[a] = static_cast<int>(std::floor(extent)) + 1;
     n_total *= static_cast<std::size_t>(n_cells_[a]);
   }
-  if constexpr (dim > 2) {  // (in 2D 1e8 x 1e8 cells overflow nothing; the allocation fails first)
-    // Cell indices are stored as LocalIndex.
-    if (static_cast<double>(n_cells_.cast<double>().prod()) > 2e9)
-      throw std::runtime_error("CellGrid: particles spread over too many cells");
-  }
+  // 3D: cell indices are stored as LocalIndex, and 1e8 cells per axis would overflow the count (2D keeps
+  // its behaviour: there the allocation fails first).
+  if (dim > 2 && n_cells_.cast<double>().prod() > 2e9)
+    throw std::runtime_error("CellGrid: particles spread over too many cells");
   cell_start_.assign(n_total + 1, 0);
   cell_of_point_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -62,6 +61,27 @@ CellGrid::Cell CellGrid::cell_of(const Vec& x) const {
   return c;
 }
 
+namespace {
+/// Insertion sort of a[0 .. m): the lists are short and, for particles kept in cell order, nearly
+/// sorted. Unguarded inner loop (as in std::sort's final pass): a value smaller than a[0] is moved to the
+/// front directly, so the scan for the others needs no bounds test. Kept out of line: the speed of the
+/// short inner loop then does not depend on the stencil loop it would be inlined into.
+__attribute__((noinline)) void sort_short_list(LocalIndex* a, const std::size_t m) {
+  for (std::size_t p = 1; p < m; ++p) {
+    const LocalIndex v = a[p];
+    if (!(a[p - 1] > v)) continue;  // already in place (the usual case in cell order)
+    if (v < a[0]) {
+      std::move_backward(a, a + p, a + p + 1);
+      a[0] = v;
+      continue;
+    }
+    LocalIndex* q = a + p;  // a[0] <= v < a[p - 1]
+    for (; q[-1] > v; --q) *q = q[-1];
+    *q = v;
+  }
+}
+}  // namespace
+
 void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
                           const bool sorted_lists) {
   constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^d cells
@@ -75,6 +95,9 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
   out.offset[0] = 0;
   const auto& sorted = grid.sorted();
   const auto& xs = grid.sorted_positions();
+  // Grid size in locals: the list writes below are ints and could alias the grid's members.
+  CellGrid::Cell n_cells;
+  for (int a = 0; a < dim; ++a) n_cells[a] = grid.n_cells(a);
   std::size_t n_pairs = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec xi = x[i];
@@ -83,15 +106,17 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
     CellGrid::Cell lo, hi;
     for (int a = 0; a < dim; ++a) {
       lo[a] = std::max(c[a] - reach, 0);
-      hi[a] = std::min(c[a] + reach, grid.n_cells(a) - 1);
+      hi[a] = std::min(c[a] + reach, n_cells[a] - 1);
     }
+    const auto row_length = static_cast<std::size_t>(hi[0] - lo[0] + 1);
     // Rows of the stencil: every cell coordinate of axes 1 .. d-1 (an odometer, axis 1 fastest); the
     // cells lo[0] .. hi[0] of a row are contiguous in the sorted arrays.
-    CellGrid::Cell row = lo, row_end = lo;
-    row_end[0] = hi[0];
+    CellGrid::Cell row = lo;
     for (;;) {
-      const std::size_t first = grid.cell_start(grid.cell_index(row));
-      const std::size_t last = grid.cell_start(grid.cell_index(row_end) + 1);
+      std::size_t cell = static_cast<std::size_t>(row[dim - 1]);  // linear index of the row's first cell
+      for (int a = dim - 2; a >= 0; --a) cell = cell * static_cast<std::size_t>(n_cells[a]) + static_cast<std::size_t>(row[a]);
+      const std::size_t first = grid.cell_start(cell);
+      const std::size_t last = grid.cell_start(cell + row_length);
       if (n_pairs + (last - first) > out.index.size()) out.index.resize(2 * (n_pairs + (last - first)) + 1024);
       LocalIndex* dst = out.index.data() + n_pairs;
       for (std::size_t k = first; k < last; ++k) {
@@ -108,20 +133,9 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
         row[a] = lo[a];
       }
       if (a == dim) break;
-      for (int b = 1; b < dim; ++b) row_end[b] = row[b];
     }
     out.offset[i + 1] = n_pairs;
-    if (sorted_lists) {
-      // Insertion sort: the lists are short and, for particles kept in cell order, nearly sorted.
-      LocalIndex* a = out.index.data() + out.offset[i];
-      const std::size_t m = n_pairs - out.offset[i];
-      for (std::size_t p = 1; p < m; ++p) {
-        const LocalIndex v = a[p];
-        std::size_t q = p;
-        for (; q > 0 && a[q - 1] > v; --q) a[q] = a[q - 1];
-        a[q] = v;
-      }
-    }
+    if (sorted_lists) sort_short_list(out.index.data() + out.offset[i], n_pairs - out.offset[i]);
   }
   out.index.resize(n_pairs);
 }

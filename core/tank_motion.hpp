@@ -62,7 +62,7 @@ class TankMotion {
   Real end_time() const;
 
 #if MPSFSI_DIM == 2
-  /// Rotation matrix R(theta) (2D: the plane rotation; 3D: matrix(theta) with the roll axis).
+  /// 2D: the plane rotation matrix R(theta) (3D: use matrix(theta), which knows the roll axis).
   static Mat rotation(Real theta);
 #endif
   /// Rotation matrix R(theta) about the roll axis.
