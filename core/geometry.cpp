@@ -1,4 +1,5 @@
-// Lattice geometry: filled rectangles, box walls, wall blocks (seed 004 §4.3).
+// Lattice geometry in MPSFSI_DIM dimensions: filled rectangles / boxes, box walls, wall blocks
+// (seed 004 §4.3). Every builder walks the lattice cells with axis 0 fastest (row by row in 2D).
 #include "core/geometry.hpp"
 
 #include <algorithm>
@@ -7,6 +8,41 @@
 #include <string>
 
 namespace mpsfsi {
+
+namespace {
+
+/// Cells per axis of the box [lo, hi].
+IVec cells_of(const Vec& lo, const Vec& hi, const Real dp) {
+  IVec n;
+  for (int a = 0; a < dim; ++a) n[a] = lattice_cells(hi[a] - lo[a], dp);
+  return n;
+}
+
+/// Centre lo + (i + 1/2) dp of lattice cell i.
+Vec centre(const Vec& lo, const IVec& i, const Real dp) {
+  Vec x;
+  for (int a = 0; a < dim; ++a) x[a] = lo[a] + (i[a] + 0.5) * dp;
+  return x;
+}
+
+/// Calls f(i) for every cell i with first[a] <= i[a] <= last[a], axis 0 fastest.
+template <class F>
+void for_each_cell(const IVec& first, const IVec& last, F&& f) {
+  for (int a = 0; a < dim; ++a)
+    if (last[a] < first[a]) return;
+  IVec i = first;
+  for (;;) {
+    f(i);
+    int a = 0;
+    for (; a < dim; ++a) {
+      if (++i[a] <= last[a]) break;
+      i[a] = first[a];
+    }
+    if (a == dim) return;
+  }
+}
+
+}  // namespace
 
 int lattice_cells(const Real length, const Real dp) {
   if (!(dp > 0)) throw std::invalid_argument("lattice: dp must be positive");
@@ -17,47 +53,44 @@ int lattice_cells(const Real length, const Real dp) {
 }
 
 std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, const Real dp) {
-  const int nx = lattice_cells(hi[0] - lo[0], dp);
-  const int ny = lattice_cells(hi[1] - lo[1], dp);
+  const IVec n = cells_of(lo, hi, dp);
   std::vector<Vec> x;
-  x.reserve(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) x.emplace_back(lo[0] + (i + 0.5) * dp, lo[1] + (j + 0.5) * dp);
+  std::size_t total = 1;
+  for (int a = 0; a < dim; ++a) total *= static_cast<std::size_t>(n[a]);
+  x.reserve(total);
+  for_each_cell(IVec::Zero(), n - IVec::Ones(), [&](const IVec& i) { x.push_back(centre(lo, i, dp)); });
   return x;
 }
 
 std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, const Real dp, const bool open_top,
                                  const int n_dummy) {
-  const int nx = lattice_cells(hi[0] - lo[0], dp);
-  const int ny = lattice_cells(hi[1] - lo[1], dp);
+  const IVec n = cells_of(lo, hi, dp);
   const int n_layers = 1 + n_dummy;
   std::vector<WallPoint> pts;
-  // Cell (i, j) of the extended lattice has centre lo + (i + 1/2, j + 1/2) dp; the inner box is
-  // 0 <= i < nx, 0 <= j < ny. Layer index = distance (in cells) outside the inner box.
-  const int j_top = open_top ? ny - 1 : ny - 1 + n_layers;
-  for (int j = -n_layers; j <= j_top; ++j) {
-    for (int i = -n_layers; i < nx + n_layers; ++i) {
-      const int di = i < 0 ? -i : (i >= nx ? i - nx + 1 : 0);
-      const int dj = j < 0 ? -j : (j >= ny ? j - ny + 1 : 0);
-      const int layer = std::max(di, dj);
-      if (layer == 0) continue;  // inside the box
-      pts.push_back({Vec(lo[0] + (i + 0.5) * dp, lo[1] + (j + 0.5) * dp), layer == 1});
-    }
-  }
+  // Cell i of the extended lattice has centre lo + (i + 1/2) dp; the inner box is 0 <= i_a < n_a.
+  // Layer index = distance (in cells, the largest over the axes) outside the inner box. The top is
+  // the last axis (y in 2D, z in 3D).
+  const IVec first = IVec::Constant(-n_layers);
+  IVec last = n + IVec::Constant(n_layers - 1);
+  if (open_top) last[dim - 1] = n[dim - 1] - 1;
+  for_each_cell(first, last, [&](const IVec& i) {
+    int layer = 0;
+    for (int a = 0; a < dim; ++a) layer = std::max(layer, i[a] < 0 ? -i[a] : (i[a] >= n[a] ? i[a] - n[a] + 1 : 0));
+    if (layer == 0) return;  // inside the box
+    pts.push_back({centre(lo, i, dp), layer == 1});
+  });
   return pts;
 }
 
 std::vector<WallPoint> block_walls(const Vec& lo, const Vec& hi, const Real dp, const int n_dummy) {
-  const int nx = lattice_cells(hi[0] - lo[0], dp);
-  const int ny = lattice_cells(hi[1] - lo[1], dp);
+  const IVec n = cells_of(lo, hi, dp);
   std::vector<WallPoint> pts;
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) {
-      const int depth = std::min({i, j, nx - 1 - i, ny - 1 - j});  // 0 on the outer layer
-      if (depth > n_dummy) continue;
-      pts.push_back({Vec(lo[0] + (i + 0.5) * dp, lo[1] + (j + 0.5) * dp), depth == 0});
-    }
-  }
+  for_each_cell(IVec::Zero(), n - IVec::Ones(), [&](const IVec& i) {
+    int depth = i[0];  // 0 on the outer layer
+    for (int a = 0; a < dim; ++a) depth = std::min({depth, i[a], n[a] - 1 - i[a]});
+    if (depth > n_dummy) return;
+    pts.push_back({centre(lo, i, dp), depth == 0});
+  });
   return pts;
 }
 

@@ -1,7 +1,8 @@
-// Particle geometry on a square lattice of spacing dp: filled rectangles, box walls and blocks made of
-// one wall layer plus dummy layers (seed 004 §4.3). A rectangle of n x m cells of side dp gets one
-// particle at the centre of each cell, so bodies that touch along an edge sit exactly dp apart and
-// never overlap.
+// Particle geometry on a lattice of spacing dp (square in 2D, simple cubic in 3D): filled rectangles
+// (boxes in 3D), box walls and blocks made of one wall layer plus dummy layers (seed 004 §4.3). A
+// rectangle of n x m (x l) cells of side dp gets one particle at the centre of each cell, so bodies that
+// touch along a face sit exactly dp apart and never overlap. "Rectangle" below means the axis-aligned
+// box [lo, hi] in the build's dimension.
 #pragma once
 
 #include "core/types.hpp"
@@ -14,8 +15,9 @@ namespace mpsfsi {
 /// std::invalid_argument when length or dp is not positive.
 int lattice_cells(Real length, Real dp);
 
-/// Particle centres filling the rectangle [lo, hi]: lo + (i + 1/2, j + 1/2) dp for
-/// i < lattice_cells(hi_x - lo_x), j < lattice_cells(hi_y - lo_y), row by row.
+/// Particle centres filling the rectangle [lo, hi]: lo + (i + 1/2, j + 1/2 [, k + 1/2]) dp for
+/// i < lattice_cells(hi_x - lo_x), j < lattice_cells(hi_y - lo_y) [, k < ...], row by row (x fastest,
+/// then y, then z).
 std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, Real dp);
 
 /// A lattice point and whether it belongs to the wall layer (true) or a dummy layer (false).
@@ -25,7 +27,8 @@ struct WallPoint {
 };
 
 /// Walls of a box whose inner (wetted) rectangle is [lo, hi]: one wall layer and n_dummy dummy layers
-/// outside it, corners included. With open_top the top side has no lid (side walls reach hi_y).
+/// outside it, edges and corners included. With open_top the top side (the last axis: y in 2D, z in 3D)
+/// has no lid (side walls reach hi_y, resp. hi_z). Points come row by row like fill_rectangle.
 std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, Real dp, bool open_top, int n_dummy = 2);
 
 /// A solid block [lo, hi] made of wall particles: the outer layer is wall, the next n_dummy layers are

@@ -1,4 +1,5 @@
-// Lattice constants of the MPS kernel on a perfect square lattice (seed 004 eq. 8, 13).
+// Lattice constants of the MPS kernel on a perfect lattice of spacing dp (seed 004 eq. 8, 13): the square
+// lattice in 2D, the simple cubic lattice in 3D.
 #include "core/kernel.hpp"
 
 #include <cmath>
@@ -11,18 +12,28 @@ LatticeConstants lattice_constants(const Real dp, const Real re) {
   LatticeConstants c;
   c.dp = dp;
   c.re = re;
+  // Sum over the lattice points dp (i_0, .., i_{d-1}) with |i_a| <= m, the last axis fastest (in 2D:
+  // for i, for j), skipping the centre: the square lattice in 2D, the simple cubic lattice in 3D.
   const int m = static_cast<int>(std::ceil(re / dp)) + 1;
   Real sum_w = 0, sum_r2w = 0;
-  for (int i = -m; i <= m; ++i) {
-    for (int j = -m; j <= m; ++j) {
-      if (i == 0 && j == 0) continue;
-      const Real r = dp * std::sqrt(Real(i * i + j * j));
-      const Real w = weight(r, re);
-      if (w <= 0) continue;
-      sum_w += w;
-      sum_r2w += r * r * w;
-      ++c.n_neighbours;
+  IVec p = IVec::Constant(-m);
+  for (;;) {
+    const int i2 = p.squaredNorm();
+    if (i2 != 0) {
+      const Real r = dp * std::sqrt(Real(i2));
+      const Real w = weight(r, re);  // eq. 7
+      if (w > 0) {
+        sum_w += w;
+        sum_r2w += r * r * w;
+        ++c.n_neighbours;
+      }
     }
+    int a = dim - 1;
+    for (; a >= 0; --a) {
+      if (++p[a] <= m) break;
+      p[a] = -m;
+    }
+    if (a < 0) break;
   }
   c.n0 = sum_w;
   c.lambda = sum_r2w / sum_w;

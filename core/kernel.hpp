@@ -16,8 +16,8 @@ inline bool in_support(const Real r2, const Real re) { return r2 > 0 && r2 < re 
 /// Weight w(r) = re/r - 1 for 0 < r < re, else 0 (seed 004 eq. 7).
 inline Real weight(const Real r, const Real re) { return in_support(r * r, re) ? re / r - 1.0 : 0.0; }
 
-/// Constants of a perfect square lattice of spacing dp for an effective radius re, taken at an
-/// interior particle: n0 = sum w (eq. 8), N0 = number of neighbours with w > 0, and
+/// Constants of a perfect lattice of spacing dp (square in 2D, simple cubic in 3D) for an effective
+/// radius re, taken at an interior particle: n0 = sum w (eq. 8), N0 = number of neighbours with w > 0, and
 /// lambda = sum r^2 w / sum w (eq. 13).
 struct LatticeConstants {
   Real dp = 0;

@@ -1,4 +1,5 @@
-// O(N) cell-linked neighbour search (counting sort into cells, then a 3x3 cell stencil).
+// O(N) cell-linked neighbour search in MPSFSI_DIM dimensions (counting sort into cells, then a stencil
+// of (2 reach + 1)^d cells scanned row by row: the cells of a row along axis 0 are contiguous).
 #include "core/neighbours.hpp"
 
 #include <algorithm>
@@ -24,17 +25,21 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size) {
   if (!lo.allFinite() || !hi.allFinite())
     throw std::runtime_error("CellGrid: a particle position is not finite");
   origin_ = lo;
-  for (int a = 0; a < 2; ++a) {
+  std::size_t n_total = 1;
+  for (int a = 0; a < dim; ++a) {
     const double extent = (hi[a] - lo[a]) / cell_size;
     if (extent > 1e8) throw std::runtime_error("CellGrid: particles spread over too many cells");
     n_cells_[a] = static_cast<int>(std::floor(extent)) + 1;
+    n_total *= static_cast<std::size_t>(n_cells_[a]);
   }
-  const std::size_t n_total = static_cast<std::size_t>(n_cells_[0]) * static_cast<std::size_t>(n_cells_[1]);
+  // 3D: cell indices are stored as LocalIndex, and 1e8 cells per axis would overflow the count (2D keeps
+  // its behaviour: there the allocation fails first).
+  if (dim > 2 && n_cells_.cast<double>().prod() > 2e9)
+    throw std::runtime_error("CellGrid: particles spread over too many cells");
   cell_start_.assign(n_total + 1, 0);
   cell_of_point_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const auto c = cell_of(x[i]);
-    const auto ci = static_cast<LocalIndex>(cell_index(c[0], c[1]));
+    const auto ci = static_cast<LocalIndex>(cell_index(cell_of(x[i])));
     cell_of_point_[i] = ci;
     ++cell_start_[static_cast<std::size_t>(ci) + 1];
   }
@@ -47,18 +52,39 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size) {
   for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[static_cast<std::size_t>(sorted_[k])];
 }
 
-Eigen::Vector2i CellGrid::cell_of(const Vec& x) const {
-  Eigen::Vector2i c;
-  for (int a = 0; a < 2; ++a) {
+CellGrid::Cell CellGrid::cell_of(const Vec& x) const {
+  Cell c;
+  for (int a = 0; a < dim; ++a) {
     const int k = static_cast<int>((x[a] - origin_[a]) / cell_size_);
     c[a] = std::clamp(k, 0, n_cells_[a] - 1);
   }
   return c;
 }
 
+namespace {
+/// Insertion sort of a[0 .. m): the lists are short and, for particles kept in cell order, nearly
+/// sorted. Unguarded inner loop (as in std::sort's final pass): a value smaller than a[0] is moved to the
+/// front directly, so the scan for the others needs no bounds test. Kept out of line: the speed of the
+/// short inner loop then does not depend on the stencil loop it would be inlined into.
+__attribute__((noinline)) void sort_short_list(LocalIndex* a, const std::size_t m) {
+  for (std::size_t p = 1; p < m; ++p) {
+    const LocalIndex v = a[p];
+    if (!(a[p - 1] > v)) continue;  // already in place (the usual case in cell order)
+    if (v < a[0]) {
+      std::move_backward(a, a + p, a + p + 1);
+      a[0] = v;
+      continue;
+    }
+    LocalIndex* q = a + p;  // a[0] <= v < a[p - 1]
+    for (; q[-1] > v; --q) *q = q[-1];
+    *q = v;
+  }
+}
+}  // namespace
+
 void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
                           const bool sorted_lists) {
-  constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^2 cells
+  constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^d cells
   const std::size_t n = x.size();
   grid.build(x, radius / reach);
   const Real r2 = radius * radius;
@@ -67,40 +93,49 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
   // Keep last step's capacity; the list length changes little from step to step.
   out.index.resize(out.index.capacity());
   out.offset[0] = 0;
-  const int nx = grid.n_cells(0), ny = grid.n_cells(1);
   const auto& sorted = grid.sorted();
   const auto& xs = grid.sorted_positions();
+  // Grid size in locals: the list writes below are ints and could alias the grid's members.
+  CellGrid::Cell n_cells;
+  for (int a = 0; a < dim; ++a) n_cells[a] = grid.n_cells(a);
   std::size_t n_pairs = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec xi = x[i];
-    const auto c = grid.cell_of_point(i);
-    const int cx0 = std::max(c[0] - reach, 0), cx1 = std::min(c[0] + reach, nx - 1);
-    for (int cy = std::max(c[1] - reach, 0); cy <= std::min(c[1] + reach, ny - 1); ++cy) {
-      // The cells cx0 .. cx1 of a row are contiguous in the sorted arrays.
-      const std::size_t first = grid.cell_start(grid.cell_index(cx0, cy));
-      const std::size_t last = grid.cell_start(grid.cell_index(cx1, cy) + 1);
+    const CellGrid::Cell c = grid.cell_of_point(i);
+    // Stencil bounds per axis, clipped to the grid.
+    CellGrid::Cell lo, hi;
+    for (int a = 0; a < dim; ++a) {
+      lo[a] = std::max(c[a] - reach, 0);
+      hi[a] = std::min(c[a] + reach, n_cells[a] - 1);
+    }
+    const auto row_length = static_cast<std::size_t>(hi[0] - lo[0] + 1);
+    // Rows of the stencil: every cell coordinate of axes 1 .. d-1 (an odometer, axis 1 fastest); the
+    // cells lo[0] .. hi[0] of a row are contiguous in the sorted arrays.
+    CellGrid::Cell row = lo;
+    for (;;) {
+      std::size_t cell = static_cast<std::size_t>(row[dim - 1]);  // linear index of the row's first cell
+      for (int a = dim - 2; a >= 0; --a) cell = cell * static_cast<std::size_t>(n_cells[a]) + static_cast<std::size_t>(row[a]);
+      const std::size_t first = grid.cell_start(cell);
+      const std::size_t last = grid.cell_start(cell + row_length);
       if (n_pairs + (last - first) > out.index.size()) out.index.resize(2 * (n_pairs + (last - first)) + 1024);
       LocalIndex* dst = out.index.data() + n_pairs;
       for (std::size_t k = first; k < last; ++k) {
-        const Real dx = xs[k][0] - xi[0], dy = xs[k][1] - xi[1];
+        Real d2 = (xs[k][0] - xi[0]) * (xs[k][0] - xi[0]);
+        for (int a = 1; a < dim; ++a) d2 += (xs[k][a] - xi[a]) * (xs[k][a] - xi[a]);
         // Branch-free append: write always, advance only for a neighbour.
         *dst = sorted[k];
-        dst += (dx * dx + dy * dy < r2) & (static_cast<std::size_t>(sorted[k]) != i);
+        dst += (d2 < r2) & (static_cast<std::size_t>(sorted[k]) != i);
       }
       n_pairs = static_cast<std::size_t>(dst - out.index.data());
+      int a = 1;
+      for (; a < dim; ++a) {
+        if (++row[a] <= hi[a]) break;
+        row[a] = lo[a];
+      }
+      if (a == dim) break;
     }
     out.offset[i + 1] = n_pairs;
-    if (sorted_lists) {
-      // Insertion sort: the lists are short and, for particles kept in cell order, nearly sorted.
-      LocalIndex* a = out.index.data() + out.offset[i];
-      const std::size_t m = n_pairs - out.offset[i];
-      for (std::size_t p = 1; p < m; ++p) {
-        const LocalIndex v = a[p];
-        std::size_t q = p;
-        for (; q > 0 && a[q - 1] > v; --q) a[q] = a[q - 1];
-        a[q] = v;
-      }
-    }
+    if (sorted_lists) sort_short_list(out.index.data() + out.offset[i], n_pairs - out.offset[i]);
   }
   out.index.resize(n_pairs);
 }

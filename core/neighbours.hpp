@@ -1,6 +1,8 @@
-// O(N) cell-linked neighbour search. Particles are binned into square cells of side >= radius with a
-// counting sort; each particle's neighbours (all j != i with |x_j - x_i| < radius) are then found in
-// the 3^d surrounding cells and stored in one compressed (CSR) list, rebuilt once per step.
+// O(N) cell-linked neighbour search in MPSFSI_DIM dimensions. Particles are binned into square (2D) or
+// cubic (3D) cells with a counting sort; each particle's neighbours (all j != i with |x_j - x_i| <
+// radius) are then found in the (2 reach + 1)^d surrounding cells and stored in one compressed (CSR)
+// list, rebuilt once per step. Cells are numbered with axis 0 fastest (row by row in 2D, then layer by
+// layer in 3D), so the cells of one row of a stencil are contiguous in the sorted arrays.
 #pragma once
 
 #include "core/types.hpp"
@@ -29,32 +31,47 @@ struct NeighbourList {
 /// A uniform grid of cells over the bounding box of the points, with the points sorted by cell.
 class CellGrid {
  public:
+  /// Cell coordinates, one per axis.
+  using Cell = IVec;
+
   /// Bin the points into cells of side `cell_size` (> 0).
   void build(const std::vector<Vec>& x, Real cell_size);
 
   Real cell_size() const { return cell_size_; }
   int n_cells(const int axis) const { return n_cells_[axis]; }
   /// Cell coordinates of a point (clamped to the grid).
-  Eigen::Vector2i cell_of(const Vec& x) const;
-  /// Linear cell index of cell coordinates.
-  std::size_t cell_index(const int cx, const int cy) const {
-    return static_cast<std::size_t>(cy) * static_cast<std::size_t>(n_cells_[0]) + static_cast<std::size_t>(cx);
+  Cell cell_of(const Vec& x) const;
+  /// Linear cell index of cell coordinates: c_0 + n_0 (c_1 + n_1 (c_2 ...)), axis 0 fastest.
+  std::size_t cell_index(const Cell& c) const {
+    std::size_t k = static_cast<std::size_t>(c[dim - 1]);
+    for (int a = dim - 2; a >= 0; --a) k = k * static_cast<std::size_t>(n_cells_[a]) + static_cast<std::size_t>(c[a]);
+    return k;
   }
+#if MPSFSI_DIM == 2
+  /// 2D: linear cell index of (cx, cy) = cy n_x + cx.
+  std::size_t cell_index(const int cx, const int cy) const { return cell_index(Cell(cx, cy)); }
+#endif
   /// Points in cell c: sorted()[cell_start(c) .. cell_start(c + 1)).
   std::size_t cell_start(const std::size_t c) const { return cell_start_[c]; }
   const std::vector<LocalIndex>& sorted() const { return sorted_; }
   /// Positions in the order of sorted() (contiguous per cell, for fast scanning).
   const std::vector<Vec>& sorted_positions() const { return sorted_x_; }
   /// Cell coordinates of point i as binned by build().
-  Eigen::Vector2i cell_of_point(const std::size_t i) const {
-    const auto c = static_cast<int>(cell_of_point_[i]);
-    return Eigen::Vector2i(c % n_cells_[0], c / n_cells_[0]);
+  Cell cell_of_point(const std::size_t i) const {
+    int k = static_cast<int>(cell_of_point_[i]);
+    Cell c;
+    for (int a = 0; a < dim - 1; ++a) {
+      c[a] = k % n_cells_[a];
+      k /= n_cells_[a];
+    }
+    c[dim - 1] = k;
+    return c;
   }
 
  private:
   Real cell_size_ = 0;
   Vec origin_ = Vec::Zero();
-  int n_cells_[2] = {0, 0};
+  Cell n_cells_ = Cell::Zero();
   std::vector<std::size_t> cell_start_;
   std::vector<LocalIndex> sorted_;
   std::vector<LocalIndex> cell_of_point_;
@@ -62,14 +79,14 @@ class CellGrid {
 };
 
 /// Build the neighbour list of all points for `radius` (strictly closer than radius, j != i).
-/// Cells of side radius / 2 and a 5 x 5 cell stencil: fewer candidates than 3 x 3 cells of side radius.
+/// Cells of side radius / 2 and a stencil of 5^d cells: fewer candidates than 3^d cells of side radius.
 /// `grid` is reused between calls to avoid reallocation.
 /// With sorted = false each particle's neighbours come in cell order (a little faster).
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid,
                           bool sorted = true);
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out);
 
-/// A particle order that follows the cells (row by row), for memory locality:
+/// A particle order that follows the cells (axis 0 fastest: row by row), for memory locality:
 /// reorder particles with ParticleSet::reorder(cell_order(x, radius / 2)). With the same cell side
 /// as build_neighbour_list uses (radius / 2), the lists of unmoved particles come out already sorted.
 std::vector<LocalIndex> cell_order(const std::vector<Vec>& x, Real cell_size);

@@ -1,4 +1,5 @@
-// MPS differential operators (seed 004 eq. 8-15), one neighbour-list loop each.
+// MPS differential operators (seed 004 eq. 8-15), one neighbour-list loop each; dimension-generic
+// (d = dim in eq. 9, 10, 12; A_i of eq. 15 is d x d).
 #include "core/operators.hpp"
 
 #include "core/kernel.hpp"
@@ -117,7 +118,11 @@ void corrected_gradient(const std::vector<Vec>& x, const NeighbourList& nl, cons
     if (n_i <= 0) continue;  // isolated particle: no gradient
     const Real det = m.determinant();
     const Real tr = m.trace();
-    if (det > 1e-10 * tr * tr)
+    // det > 1e-10 tr^d: det / tr^d is a scale-free measure of how well A_i is conditioned
+    // (evaluated as ((1e-10 tr) tr) .. so that 2D keeps its rounding).
+    Real threshold = 1e-10 * tr;
+    for (int a = 1; a < dim; ++a) threshold *= tr;
+    if (det > threshold)
       out[i] = m.inverse() * b;  // eq. 14 with A from eq. 15
     else
       out[i] = (dim / n_i) * b;  // eq. 9 with the particle's own n_i

@@ -1,7 +1,8 @@
 // MPS differential operators over a neighbour list (seed 004 §3): particle number density (eq. 8),
 // gradient (eq. 9) and its stable minimum-value variant, divergence (eq. 10), Laplacian (eq. 12) and
 // the corrected gradient (eq. 14-15). Each is one loop over the neighbour list; a list built for a
-// larger radius may be used with a smaller re (the weight vanishes beyond re).
+// larger radius may be used with a smaller re (the weight vanishes beyond re). All of them work in
+// MPSFSI_DIM dimensions (d = dim); n0 and lambda come from lattice_constants() of the same dimension.
 #pragma once
 
 #include "core/neighbours.hpp"

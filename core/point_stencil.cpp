@@ -1,5 +1,6 @@
 // Point stencils for sources and receivers: Wendland C2 weights with a first-order (moving least
-// squares) correction; see core/point_stencil.hpp.
+// squares) correction, in MPSFSI_DIM dimensions (basis (1, d): d + 1 unknowns); see
+// core/point_stencil.hpp.
 #include "core/point_stencil.hpp"
 
 #include <Eigen/Dense>
@@ -11,6 +12,17 @@
 namespace mpsfsi {
 
 namespace {
+
+/// Moving-least-squares basis p = (1, d / radius): d + 1 entries.
+using Basis = Eigen::Matrix<Real, dim + 1, 1>;
+using BasisMat = Eigen::Matrix<Real, dim + 1, dim + 1>;
+
+Basis basis(const Vec& d, const Real radius) {
+  Basis p;
+  p[0] = 1;
+  for (int a = 0; a < dim; ++a) p[a + 1] = d[a] / radius;
+  return p;
+}
 
 /// The candidates within radius of the point, with their kernel weights and offsets d = x - point.
 struct InRange {
@@ -35,13 +47,14 @@ InRange gather(const std::vector<Vec>& x, const std::vector<std::size_t>& candid
 }
 
 /// Throws unless the weighted covariance `c` [m2] of the offsets (normalised by the sum of the weights)
-/// is well conditioned: three or more particles that are not on one line.
-void check_spread(const Eigen::Matrix2d& c, const Real radius, const std::size_t n, const char* what) {
-  const Real smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(c).eigenvalues().minCoeff();
-  if (n < 3 || !(smallest > 1e-8 * radius * radius))
-    throw std::invalid_argument(std::string(what) + ": fewer than three particles that are not on one line lie within " +
-                                "the radius " + std::to_string(radius) + " m of the point (" + std::to_string(n) +
-                                " in range); use a larger radius or a point inside the body");
+/// is well conditioned: d + 1 or more particles that do not lie on one line (2D) / in one plane (3D).
+void check_spread(const Mat& c, const Real radius, const std::size_t n, const char* what) {
+  const Real smallest = Eigen::SelfAdjointEigenSolver<Mat>(c).eigenvalues().minCoeff();
+  if (n < static_cast<std::size_t>(dim + 1) || !(smallest > 1e-8 * radius * radius))
+    throw std::invalid_argument(std::string(what) + (dim == 2 ? ": fewer than three particles that are not on one line"
+                                                              : ": fewer than four particles that are not in one plane") +
+                                " lie within the radius " + std::to_string(radius) + " m of the point (" +
+                                std::to_string(n) + " in range); use a larger radius or a point inside the body");
 }
 
 }  // namespace
@@ -58,28 +71,25 @@ PointStencil interpolation_stencil(const std::vector<Vec>& x, const std::vector<
   const InRange r = gather(x, candidates, point, radius, "interpolation stencil");
   // Moving least squares with the basis p = (1, d): phi_k = w_k p(0)^T A^-1 p(d_k), A = sum w p p^T.
   // Offsets are scaled by the radius so that A is of order one.
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  BasisMat a = BasisMat::Zero();
   Real sw = 0;
   Vec mean = Vec::Zero();
   for (std::size_t q = 0; q < r.index.size(); ++q) {
-    const Eigen::Vector3d p(1, r.d[q][0] / radius, r.d[q][1] / radius);
+    const Basis p = basis(r.d[q], radius);
     a += r.w[q] * p * p.transpose();
     sw += r.w[q];
     mean += r.w[q] * r.d[q];
   }
-  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();
+  Mat c = Mat::Zero();
   if (sw > 0) {
     mean /= sw;
     for (std::size_t q = 0; q < r.index.size(); ++q) c += r.w[q] * (r.d[q] - mean) * (r.d[q] - mean).transpose() / sw;
   }
   check_spread(c, radius, r.index.size(), "interpolation stencil");
-  const Eigen::Vector3d row = a.ldlt().solve(Eigen::Vector3d(1, 0, 0));  // A^-1 p(0), A symmetric
+  const Basis row = a.ldlt().solve(Basis::Unit(0));  // A^-1 p(0), A symmetric
   PointStencil s;
   s.index = r.index;
-  for (std::size_t q = 0; q < r.index.size(); ++q) {
-    const Eigen::Vector3d p(1, r.d[q][0] / radius, r.d[q][1] / radius);
-    s.weight.push_back(r.w[q] * row.dot(p));
-  }
+  for (std::size_t q = 0; q < r.index.size(); ++q) s.weight.push_back(r.w[q] * row.dot(basis(r.d[q], radius)));
   return s;
 }
 
@@ -93,10 +103,10 @@ VectorStencil moment_stencil(const std::vector<Vec>& x, const std::vector<std::s
     mean += r.w[q] * r.d[q];
   }
   if (sw > 0) mean /= sw;
-  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();
+  Mat c = Mat::Zero();
   for (std::size_t q = 0; q < r.index.size(); ++q) c += r.w[q] * (r.d[q] - mean) * (r.d[q] - mean).transpose();
-  check_spread(sw > 0 ? Eigen::Matrix2d(c / sw) : c, radius, r.index.size(), "moment stencil");
-  const Eigen::Matrix2d c_inv = c.inverse();
+  check_spread(sw > 0 ? Mat(c / sw) : c, radius, r.index.size(), "moment stencil");
+  const Mat c_inv = c.inverse();
   VectorStencil s;
   s.index = r.index;
   // sum g = C^-1 sum w (d - dbar) = 0; sum d g^T = sum w d (d - dbar)^T C^-1 = C C^-1 = I (C symmetric).

@@ -36,8 +36,8 @@ struct VectorStencil {
 };
 
 /// Linear-exact interpolation weights at `point` over the particles `candidates` (indices into x)
-/// that lie within `radius`. Throws std::invalid_argument when fewer than three non-collinear
-/// particles are in range (the linear fit is then undetermined).
+/// that lie within `radius`. Throws std::invalid_argument when fewer than three non-collinear (2D) /
+/// four non-coplanar (3D) particles are in range (the linear fit is then undetermined).
 PointStencil interpolation_stencil(const std::vector<Vec>& x, const std::vector<std::size_t>& candidates,
                                    const Vec& point, Real radius);
 

@@ -1,6 +1,9 @@
-// Prescribed tank roll: sine or measured angle table (linear interpolation, centred-difference omega); the
+// Prescribed tank roll: sine or measured angle table (linear interpolation, centred-difference omega);
+// rigid rotation about the pivot (about the z axis through the pivot in 3D) with core/rotation.hpp; the
 // reader of the case files' time tables (tank motion, wavelets).
 #include "core/tank_motion.hpp"
+
+#include "core/rotation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -171,22 +174,21 @@ Real TankMotion::end_time() const {
   return params_.type == TankMotionParams::Type::table ? params_.time.back() : std::numeric_limits<Real>::infinity();
 }
 
-Mat TankMotion::rotation(const Real theta) {
-  const Real c = std::cos(theta), s = std::sin(theta);
-  Mat r;
-  r << c, -s, s, c;
-  return r;
-}
-
-Vec TankMotion::place(const Vec& x0, const Real theta) const { return params_.pivot + rotation(theta) * (x0 - params_.pivot); }
-
+#if MPSFSI_DIM == 2
+Mat TankMotion::rotation(const Real theta) { return Rotation::about_z(theta).matrix(); }
+Vec TankMotion::velocity_at(const Vec& x, const Real omega) const { return cross(about_z(omega), Vec(x - params_.pivot)); }
+Mat TankMotion::matrix(const Real theta) const { return rotation(theta); }
+#else
+Mat TankMotion::matrix(const Real theta) const { return Rotation::about_axis(params_.axis, theta).matrix(); }
 Vec TankMotion::velocity_at(const Vec& x, const Real omega) const {
-  const Vec r = x - params_.pivot;
-  return omega * Vec(-r[1], r[0]);
+  return cross(Vec(omega * params_.axis.normalized()), Vec(x - params_.pivot));
 }
+#endif
+
+Vec TankMotion::place(const Vec& x0, const Real theta) const { return params_.pivot + matrix(theta) * (x0 - params_.pivot); }
 
 Vec TankMotion::to_tank_frame(const Vec& x, const Real theta) const {
-  return rotation(-theta) * (x - params_.pivot);
+  return matrix(-theta) * (x - params_.pivot);
 }
 
 }  // namespace mpsfsi

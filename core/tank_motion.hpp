@@ -2,8 +2,11 @@
 // clockwise positive] and angular velocity omega(t) [rad/s] of a sine roll or of a measured angle series
 // (a table of time, angle). The fluid moves its walls with it, the solid its clamped particles, and the
 // probes use it to express displacements in the tank's frame. Knows nothing of case files:
-// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec. Also holds the
-// reader of time tables (read_time_table), which the case parser uses for every table a case names.
+// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec. In 3D the tank
+// rolls about the line through the pivot along TankMotionParams::axis (default e_z; theta and omega stay
+// scalars, right-handed about the axis). With z up a roll axis is horizontal: -e_y rolls the x-z section
+// exactly as the 2D tank rolls in the x-y plane. Also holds the reader of time tables (read_time_table),
+// which the case parser uses for every table a case names.
 #pragma once
 
 #include "core/types.hpp"
@@ -21,6 +24,9 @@ struct TankMotionParams {
   enum class Type { none, sine_roll, table };
   Type type = Type::none;
   Vec pivot = Vec::Zero();    ///< rotation centre [m]
+#if MPSFSI_DIM == 3
+  Vec axis = Vec::UnitZ();    ///< 3D: roll axis through the pivot (normalised when used)
+#endif
   Real amplitude = 0;         ///< sine_roll: amplitude [rad]
   Real period = 1;            ///< sine_roll: period [s]
   std::vector<Real> time;     ///< table: sample times [s], strictly increasing
@@ -90,11 +96,16 @@ class TankMotion {
   /// Last time of a table (the motion stops afterwards); +inf for sine_roll and none.
   Real end_time() const;
 
-  /// Rotation matrix R(theta).
+#if MPSFSI_DIM == 2
+  /// 2D: the plane rotation matrix R(theta) (3D: use matrix(theta), which knows the roll axis).
   static Mat rotation(Real theta);
+#endif
+  /// Rotation matrix R(theta) about the roll axis.
+  Mat matrix(Real theta) const;
   /// Where a point x0 of the tank at rest is at angle theta: pivot + R(theta) (x0 - pivot).
   Vec place(const Vec& x0, Real theta) const;
-  /// Velocity of the tank point now at x, rotating with omega about the pivot: omega x (x - pivot).
+  /// Velocity of the tank point now at x, rotating with omega about the pivot: omega e x (x - pivot),
+  /// e = e_z in 2D, the roll axis in 3D.
   Vec velocity_at(const Vec& x, Real omega) const;
   /// x (global) in the tank frame at angle theta, relative to the pivot: R(-theta) (x - pivot).
   Vec to_tank_frame(const Vec& x, Real theta) const;

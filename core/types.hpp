@@ -1,9 +1,11 @@
 // Basic types of mpsfsi: the compile-time spatial dimension, scalars, small fixed-size vectors
-// and matrices (Eigen), and the index types shared with the distributed pressure solve.
+// and matrices (Eigen), the index types shared with the distributed pressure solve, and the
+// dimension-aware cross product (a scalar in 2D, a vector in 3D).
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <type_traits>
 
 #ifndef MPSFSI_DIM
 #define MPSFSI_DIM 2
@@ -11,9 +13,10 @@
 
 namespace mpsfsi {
 
-/// Spatial dimension d of the build (seed 004 uses d in eq. 9-12).
+/// Spatial dimension d of the build (seed 004 uses d in eq. 9-12). CMake accepts 2 or 3; only core/
+/// is dimension-generic, the other modules assert dim == 2 in their headers (see io/case.hpp).
 inline constexpr int dim = MPSFSI_DIM;
-static_assert(dim == 2, "mpsfsi: only the 2D build is implemented");
+static_assert(dim == 2 || dim == 3, "mpsfsi: MPSFSI_DIM must be 2 or 3");
 
 using Real = double;
 
@@ -21,13 +24,28 @@ using Real = double;
 inline constexpr Real pi = 3.14159265358979323846;
 using Vec = Eigen::Matrix<Real, dim, 1>;
 using Mat = Eigen::Matrix<Real, dim, dim>;
+/// Integer cell (lattice) coordinates, one per axis.
+using IVec = Eigen::Matrix<int, dim, 1>;
 
 /// Global particle id; same type as Tpetra's GlobalOrdinal in Debian's Trilinos (long long).
 using GlobalId = long long;
 /// Index of a particle on this rank.
 using LocalIndex = std::int32_t;
 
-/// 2D cross product (z component) of two vectors.
+/// Angular quantities (rotation vector, angular velocity, torque, a x b): the z component (a scalar)
+/// in 2D, a vector in 3D.
+using Angular = std::conditional_t<dim == 2, Real, Vec>;
+
+/// Cross product a x b: in 2D its z component a_x b_y - a_y b_x (a scalar), in 3D the vector.
+#if MPSFSI_DIM == 2
 inline Real cross(const Vec& a, const Vec& b) { return a[0] * b[1] - a[1] * b[0]; }
+/// 2D only: w e_z x r for a scalar (z) angular quantity w, the in-plane vector w (-r_y, r_x).
+/// (In 3D w is a Vec and cross(w, r) above is the same product.)
+inline Vec cross(const Real w, const Vec& r) { return w * Vec(-r[1], r[0]); }
+#else
+inline Vec cross(const Vec& a, const Vec& b) {
+  return Vec(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]);
+}
+#endif
 
 }  // namespace mpsfsi

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -196,17 +198,34 @@ std::size_t estimate_memory_bytes(const CaseSpec& spec, const Scene& scene) {
                                                     p.n_of_kind(ParticleKind::wall), p.n_of_kind(ParticleKind::dummy)});
 }
 
-std::optional<std::size_t> available_memory_bytes() {
-  std::ifstream in("/proc/meminfo");
+namespace {
+
+/// The value in kB of `key` ("MemAvailable:", "VmSize:") in a /proc file, in bytes.
+std::optional<std::size_t> proc_kib(const char* file, const std::string& key) {
+  std::ifstream in(file);
   std::string line;
   while (std::getline(in, line)) {
     std::istringstream s(line);
-    std::string key, unit;
+    std::string k, unit;
     double kib = 0;
-    if (s >> key >> kib >> unit && key == "MemAvailable:" && unit == "kB" && kib >= 0)
-      return static_cast<std::size_t>(kib * 1024);
+    if (s >> k >> kib >> unit && k == key && unit == "kB" && kib >= 0) return static_cast<std::size_t>(kib * 1024);
   }
   return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::size_t> available_memory_bytes() {
+  std::optional<std::size_t> available = proc_kib("/proc/meminfo", "MemAvailable:");
+  // A limit on the address space (ulimit -v) leaves this process less than the machine has.
+  rlimit as{};
+  if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    const std::size_t used = proc_kib("/proc/self/status", "VmSize:").value_or(0);
+    const std::size_t limit = static_cast<std::size_t>(as.rlim_cur);
+    const std::size_t left = limit > used ? limit - used : 0;
+    available = available ? std::min(*available, left) : left;
+  }
+  return available;
 }
 
 void check_scene_size(const CaseSpec& spec, const std::optional<std::size_t>& available) {

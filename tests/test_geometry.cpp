@@ -1,4 +1,5 @@
-// Unit tests of the lattice geometry: filled rectangles, box walls, wall blocks.
+// Unit tests of the lattice geometry: filled rectangles (boxes in 3D), box walls, wall blocks; the 2D
+// tests count rows and columns, the 3D ones faces, edges and corners.
 #include "core/geometry.hpp"
 #include "core/neighbours.hpp"
 
@@ -18,6 +19,7 @@ Real min_spacing(const std::vector<Vec>& x, const Real probe) {
 }
 }  // namespace
 
+#if MPSFSI_DIM == 2
 TEST(Geometry, FillRectangleExactLattice) {
   const Real dp = 0.002;
   const auto x = fill_rectangle(Vec(0.1, 0.0), Vec(0.146, 0.292), dp);
@@ -29,6 +31,23 @@ TEST(Geometry, FillRectangleExactLattice) {
   EXPECT_NEAR(min_spacing(x, 2 * dp), dp, 1e-15);
 }
 
+#else
+TEST(Geometry, FillBoxExactLattice) {
+  const Real dp = 0.002;
+  const auto x = fill_rectangle(Vec(0.1, 0.0, -0.01), Vec(0.146, 0.03, 0.0), dp);  // 23 x 15 x 5
+  EXPECT_EQ(x.size(), 23u * 15u * 5u);
+  EXPECT_DOUBLE_EQ(x.front()[0], 0.1 + 0.5 * dp);
+  EXPECT_DOUBLE_EQ(x.front()[2], -0.01 + 0.5 * dp);
+  EXPECT_DOUBLE_EQ(x[1][0], 0.1 + 1.5 * dp);  // x fastest
+  EXPECT_DOUBLE_EQ(x[23][1], 1.5 * dp);       // then y
+  EXPECT_DOUBLE_EQ(x[23 * 15][2], -0.01 + 1.5 * dp);
+  EXPECT_DOUBLE_EQ(x.back()[0], 0.1 + 22.5 * dp);
+  EXPECT_DOUBLE_EQ(x.back()[1], 14.5 * dp);
+  EXPECT_NEAR(x.back()[2], -0.01 + 4.5 * dp, 1e-17);
+  EXPECT_NEAR(min_spacing(x, 2 * dp), dp, 1e-15);
+}
+#endif
+
 TEST(Geometry, LatticeCellsRoundsAndRejectsBadInput) {
   EXPECT_EQ(lattice_cells(0.146, 0.0016), 91);  // 91.25 -> 91
   EXPECT_EQ(lattice_cells(1e-9, 1.0), 1);
@@ -36,6 +55,7 @@ TEST(Geometry, LatticeCellsRoundsAndRejectsBadInput) {
   EXPECT_THROW(lattice_cells(-1.0, 0.1), std::invalid_argument);
 }
 
+#if MPSFSI_DIM == 2
 TEST(Geometry, OpenBoxWallsHaveOneWallAndTwoDummyLayers) {
   const Real dp = 0.01;
   const int nx = 20, ny = 10;
@@ -72,3 +92,50 @@ TEST(Geometry, BlockKeepsOuterWallAndTwoDummyLayers) {
   EXPECT_EQ(n_wall, static_cast<std::size_t>(2 * 24 + 2 * 48 - 4));
   EXPECT_EQ(b.size(), static_cast<std::size_t>(24 * 48 - 18 * 42));  // the core deeper than 3 layers is left out
 }
+#else
+namespace {
+/// Lattice points of the open (closed) box grown by L layers: (nx + 2L)(ny + 2L)(nz + L (2L)).
+std::size_t grown(const int nx, const int ny, const int nz, const int layers, const bool open_top) {
+  return static_cast<std::size_t>((nx + 2 * layers) * (ny + 2 * layers) * (nz + (open_top ? 1 : 2) * layers));
+}
+}  // namespace
+
+TEST(Geometry, OpenBoxWallsHaveOneWallAndTwoDummyLayers) {
+  const Real dp = 0.01;
+  const int nx = 8, ny = 6, nz = 5;
+  const auto w = box_walls(Vec::Zero(), Vec(nx * dp, ny * dp, nz * dp), dp, true);
+  std::size_t n_wall = 0, n_dummy = 0;
+  for (const auto& p : w) {
+    (p.is_wall ? n_wall : n_dummy) += 1;
+    // Nothing inside the box.
+    EXPECT_FALSE(p.x[0] > 0 && p.x[0] < nx * dp && p.x[1] > 0 && p.x[1] < ny * dp && p.x[2] > 0) << p.x.transpose();
+    EXPECT_LT(p.x[2], nz * dp);  // open top: nothing above the box
+  }
+  // Floor, four sides, their edges and corners: the shells between the grown boxes.
+  EXPECT_EQ(n_wall, grown(nx, ny, nz, 1, true) - grown(nx, ny, nz, 0, true));
+  EXPECT_EQ(n_dummy, grown(nx, ny, nz, 3, true) - grown(nx, ny, nz, 1, true));
+  // The fluid that fills the box sits exactly dp from the wall layer, never closer.
+  auto all = fill_rectangle(Vec::Zero(), Vec(nx * dp, ny * dp, nz * dp), dp);
+  for (const auto& p : w) all.push_back(p.x);
+  EXPECT_NEAR(min_spacing(all, 2 * dp), dp, 1e-15);
+}
+
+TEST(Geometry, ClosedBoxHasALid) {
+  const Real dp = 0.01;
+  const int n = 10;
+  const auto open = box_walls(Vec::Zero(), Vec::Constant(n * dp), dp, true);
+  const auto closed = box_walls(Vec::Zero(), Vec::Constant(n * dp), dp, false);
+  EXPECT_EQ(closed.size(), grown(n, n, n, 3, false) - grown(n, n, n, 0, false));
+  // The lid adds 3 full layers of the widened box (16 x 16 particles each).
+  EXPECT_EQ(closed.size() - open.size(), 3u * 16u * 16u);
+}
+
+TEST(Geometry, BlockKeepsOuterWallAndTwoDummyLayers) {
+  const Real dp = 0.001;
+  const auto b = block_walls(Vec::Zero(), Vec(0.012, 0.010, 0.008), dp);  // 12 x 10 x 8 cells
+  std::size_t n_wall = 0;
+  for (const auto& p : b) n_wall += p.is_wall;
+  EXPECT_EQ(n_wall, static_cast<std::size_t>(12 * 10 * 8 - 10 * 8 * 6));
+  EXPECT_EQ(b.size(), static_cast<std::size_t>(12 * 10 * 8 - 6 * 4 * 2));  // the core deeper than 3 layers is left out
+}
+#endif

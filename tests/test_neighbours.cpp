@@ -1,4 +1,5 @@
-// Unit tests of the cell-linked neighbour search: identical neighbour sets to brute force.
+// Unit tests of the cell-linked neighbour search: identical neighbour sets to brute force, in the 2D
+// and the 3D build (random points, lattices, clusters, points on a line), and the cell numbering.
 #include "core/geometry.hpp"
 #include "core/neighbours.hpp"
 
@@ -40,39 +41,88 @@ TEST(Neighbours, RandomPointsMatchBruteForce) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<Real> u(-0.5, 1.5);
   std::vector<Vec> x(2000);
+#if MPSFSI_DIM == 2
   for (auto& p : x) p = Vec(u(rng), 0.3 * u(rng));
+#else
+  for (auto& p : x) p = Vec(u(rng), 0.3 * u(rng), 0.5 * u(rng));
+#endif
   for (const Real radius : {0.01, 0.05, 0.13, 0.5}) expect_same_as_brute_force(x, radius);
 }
 
 TEST(Neighbours, LatticeMatchesBruteForce) {
   const Real dp = 0.01;
+#if MPSFSI_DIM == 2
   const auto x = fill_rectangle(Vec(0, 0), Vec(0.45, 0.4), dp);  // 45 x 40 = 1800 points
+#else
+  const auto x = fill_rectangle(Vec::Zero(), Vec(0.15, 0.12, 0.1), dp);  // 15 x 12 x 10 = 1800 points
+#endif
   ASSERT_EQ(x.size(), 1800u);
   // Radii on lattice distances exercise the strict "< radius" test.
   for (const Real factor : {1.0, 2.0, 2.1, 4.0}) expect_same_as_brute_force(x, factor * dp);
 }
 
 TEST(Neighbours, ClusteredAndDegeneratePoints) {
+#if MPSFSI_DIM == 2
   std::vector<Vec> x = {Vec(0, 0), Vec(0, 0), Vec(1e-9, 0), Vec(5, 5), Vec(5, 5.05)};
+#else
+  std::vector<Vec> x = {Vec(0, 0, 0), Vec(0, 0, 0), Vec(1e-9, 0, 0), Vec(5, 5, 5), Vec(5, 5.05, 5), Vec(5, 5, 4.95)};
+#endif
   expect_same_as_brute_force(x, 0.1);
-  std::vector<Vec> line(300);
-  for (std::size_t i = 0; i < line.size(); ++i) line[i] = Vec(0.0, 0.003 * static_cast<Real>(i));
-  expect_same_as_brute_force(line, 0.0071);
+  // Points on a line along every axis (a grid one cell wide in the other axes).
+  for (int axis = 0; axis < dim; ++axis) {
+    std::vector<Vec> line(300, Vec::Zero());
+    for (std::size_t i = 0; i < line.size(); ++i) line[i][axis] = 0.003 * static_cast<Real>(i);
+    expect_same_as_brute_force(line, 0.0071);
+  }
 }
 
 TEST(Neighbours, EmptyAndNonFinite) {
   NeighbourList nl;
   build_neighbour_list({}, 0.1, nl);
   EXPECT_EQ(nl.n_particles(), 0u);
-  std::vector<Vec> bad = {Vec(0, 0), Vec(std::nan(""), 0)};
+  std::vector<Vec> bad = {Vec::Zero(), Vec::Zero()};
+  bad[1][0] = std::nan("");
   EXPECT_THROW(build_neighbour_list(bad, 0.1, nl), std::runtime_error);
+}
+
+// cell_of_point decodes the linear cell index (axis 0 fastest) into the coordinates cell_of gives.
+TEST(Neighbours, CellIndexRoundTrip) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<Real> u(0, 1);
+  std::vector<Vec> x(500);
+  for (auto& p : x)
+    for (int a = 0; a < dim; ++a) p[a] = (a + 1) * u(rng);
+  CellGrid grid;
+  grid.build(x, 0.07);
+  std::size_t n_total = 1;
+  for (int a = 0; a < dim; ++a) n_total *= static_cast<std::size_t>(grid.n_cells(a));
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const CellGrid::Cell c = grid.cell_of_point(i);
+    ASSERT_EQ(c, grid.cell_of(x[i]));
+    const std::size_t k = grid.cell_index(c);
+    ASSERT_LT(k, n_total);
+    // Point i sits in the sorted range of its cell.
+    bool found = false;
+    for (std::size_t q = grid.cell_start(k); q < grid.cell_start(k + 1); ++q) found = found || grid.sorted()[q] == static_cast<LocalIndex>(i);
+    ASSERT_TRUE(found) << i;
+  }
+  CellGrid::Cell c = CellGrid::Cell::Zero();
+  c[0] = 1;
+  EXPECT_EQ(grid.cell_index(c), 1u);
+  c[0] = 0;
+  c[dim - 1] = 1;
+  EXPECT_EQ(grid.cell_index(c), n_total / static_cast<std::size_t>(grid.n_cells(dim - 1)));
 }
 
 TEST(Neighbours, CellOrderIsAPermutation) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<Real> u(0, 1);
   std::vector<Vec> x(1000);
+#if MPSFSI_DIM == 2
   for (auto& p : x) p = Vec(u(rng), u(rng));
+#else
+  for (auto& p : x) p = Vec(u(rng), u(rng), u(rng));
+#endif
   auto order = cell_order(x, 0.1);
   std::sort(order.begin(), order.end());
   for (std::size_t i = 0; i < order.size(); ++i) ASSERT_EQ(order[i], static_cast<LocalIndex>(i));

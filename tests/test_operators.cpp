@@ -1,5 +1,6 @@
 // Unit tests of the MPS operators (seed 004 eq. 8-15): exactness on linear/quadratic fields and
-// convergence as dp halves.
+// convergence as dp halves, in the 2D build (a 1 x 0.5 block) and the 3D build (a 0.4 x 0.3 x 0.3 box;
+// fields with a z part, lap of the quadratic 12 instead of 6).
 #include "core/geometry.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
@@ -21,15 +22,27 @@ struct Block {
   std::vector<std::uint8_t> interior;  ///< full kernel support inside the block
 };
 
-/// A 1 x 0.5 block on the lattice, optionally jittered by up to `jitter` dp in each direction.
-Block make_block(const Real dp, const Real support, const Real jitter = 0, const unsigned seed = 1) {
-  Block b{dp, fill_rectangle(Vec(0, 0), Vec(1.0, 0.5), dp), {}};
+#if MPSFSI_DIM == 2
+const Vec block_size(1.0, 0.5);
+#else
+const Vec block_size(0.4, 0.3, 0.3);
+#endif
+
+/// A block [0, size] on the lattice, optionally jittered by up to `jitter` dp in each direction.
+Block make_block(const Real dp, const Real support, const Real jitter = 0, const unsigned seed = 1,
+                 const Vec& size = block_size) {
+  Block b{dp, fill_rectangle(Vec::Zero(), size, dp), {}};
   std::mt19937 rng(seed);
   std::uniform_real_distribution<Real> u(-jitter * dp, jitter * dp);
   if (jitter > 0)
+#if MPSFSI_DIM == 2
     for (auto& p : b.x) p += Vec(u(rng), u(rng));
+#else
+    for (auto& p : b.x) p += Vec(u(rng), u(rng), u(rng));
+#endif
   for (const auto& p : b.x) {
-    const bool inside = p[0] > support + dp && p[0] < 1.0 - support - dp && p[1] > support + dp && p[1] < 0.5 - support - dp;
+    bool inside = true;
+    for (int a = 0; a < dim; ++a) inside = inside && p[a] > support + dp && p[a] < size[a] - support - dp;
     b.interior.push_back(inside ? 1 : 0);
   }
   return b;
@@ -41,13 +54,37 @@ std::vector<Real> field(const std::vector<Vec>& x, Real (*f)(const Vec&)) {
   return phi;
 }
 
+#if MPSFSI_DIM == 2
 Real linear(const Vec& p) { return 3.0 - 2.0 * p[0] + 5.0 * p[1]; }
+const Vec linear_grad(-2.0, 5.0);
 Real quadratic(const Vec& p) { return 1.0 + p[0] * p[0] + 2.0 * p[1] * p[1] - p[0] * p[1]; }  // lap = 6
+constexpr Real quadratic_lap = 6.0;
+/// A linear vector field and its divergence.
+Vec linear_v(const Vec& p) { return Vec(1.0 + 2.0 * p[0] + 0.5 * p[1], -3.0 * p[0] + 4.0 * p[1]); }
+constexpr Real linear_v_div = 6.0;
 Real smooth(const Vec& p) { return std::sin(3.0 * p[0]) * std::cos(2.0 * p[1]); }
 Vec smooth_grad(const Vec& p) {
   return Vec(3.0 * std::cos(3.0 * p[0]) * std::cos(2.0 * p[1]), -2.0 * std::sin(3.0 * p[0]) * std::sin(2.0 * p[1]));
 }
 Real smooth_lap(const Vec& p) { return -13.0 * smooth(p); }
+#else
+Real linear(const Vec& p) { return 3.0 - 2.0 * p[0] + 5.0 * p[1] + 1.5 * p[2]; }
+const Vec linear_grad(-2.0, 5.0, 1.5);
+Real quadratic(const Vec& p) {  // lap = 2 + 4 + 6 = 12
+  return 1.0 + p[0] * p[0] + 2.0 * p[1] * p[1] - p[0] * p[1] + 3.0 * p[2] * p[2] + p[1] * p[2];
+}
+constexpr Real quadratic_lap = 12.0;
+Vec linear_v(const Vec& p) {
+  return Vec(1.0 + 2.0 * p[0] + 0.5 * p[1] - p[2], -3.0 * p[0] + 4.0 * p[1] + p[2], 0.5 * p[0] + 3.0 * p[2]);
+}
+constexpr Real linear_v_div = 9.0;
+Real smooth(const Vec& p) { return std::sin(3.0 * p[0]) * std::cos(2.0 * p[1]) * std::cos(p[2]); }
+Vec smooth_grad(const Vec& p) {
+  const Real s = std::sin(3.0 * p[0]), c = std::cos(3.0 * p[0]), cy = std::cos(2.0 * p[1]), sy = std::sin(2.0 * p[1]);
+  return Vec(3.0 * c * cy * std::cos(p[2]), -2.0 * s * sy * std::cos(p[2]), -s * cy * std::sin(p[2]));
+}
+Real smooth_lap(const Vec& p) { return -14.0 * smooth(p); }
+#endif
 
 }  // namespace
 
@@ -62,7 +99,7 @@ TEST(Operators, CorrectedGradientExactForLinearFieldEverywhere) {
     std::vector<Vec> g;
     corrected_gradient(b.x, nl, re, field(b.x, linear), g);
     Real err = 0;
-    for (const auto& gi : g) err = std::max(err, (gi - Vec(-2.0, 5.0)).norm());
+    for (const auto& gi : g) err = std::max(err, (gi - linear_grad).norm());
     EXPECT_LT(err, 1e-12) << "jitter " << jitter;
   }
 }
@@ -79,7 +116,7 @@ TEST(Operators, GradientOfLinearFieldInInterior) {
   gradient_min(b.x, nl, re, c.n0, field(b.x, linear), gmin);
   for (std::size_t i = 0; i < b.x.size(); ++i) {
     if (!b.interior[i]) continue;
-    EXPECT_LT((g[i] - Vec(-2.0, 5.0)).norm(), 1e-10);
+    EXPECT_LT((g[i] - linear_grad).norm(), 1e-10);
   }
   // The minimum-value variant of a constant field is zero, of a linear field it only adds a
   // repulsive (outward from the minimum) part: every pair term is >= 0 along r_ij.
@@ -95,13 +132,13 @@ TEST(Operators, DivergenceOfLinearField) {
   NeighbourList nl;
   build_neighbour_list(b.x, re, nl);
   std::vector<Vec> v(b.x.size());
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = Vec(1.0 + 2.0 * b.x[i][0] + 0.5 * b.x[i][1], -3.0 * b.x[i][0] + 4.0 * b.x[i][1]);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = linear_v(b.x[i]);
   std::vector<Real> div;
   divergence(b.x, nl, re, c.n0, v, div);
   std::size_t n = 0;
   for (std::size_t i = 0; i < b.x.size(); ++i) {
     if (!b.interior[i]) continue;
-    EXPECT_NEAR(div[i], 6.0, 1e-10);
+    EXPECT_NEAR(div[i], linear_v_div, 1e-10);
     ++n;
   }
   EXPECT_GT(n, 500u);
@@ -120,7 +157,7 @@ TEST(Operators, LaplacianOfQuadraticWithin5PercentOnDisorderedParticles) {
     std::size_t n = 0;
     for (std::size_t i = 0; i < b.x.size(); ++i) {
       if (!b.interior[i]) continue;
-      worst = std::max(worst, std::abs(lap[i] - 6.0) / 6.0);
+      worst = std::max(worst, std::abs(lap[i] - quadratic_lap) / quadratic_lap);
       sum += lap[i];
       ++n;
     }
@@ -129,33 +166,43 @@ TEST(Operators, LaplacianOfQuadraticWithin5PercentOnDisorderedParticles) {
     if (jitter == 0.0) {
       EXPECT_LT(worst, 1e-9);
     } else {
-      EXPECT_LT(std::abs(sum / n - 6.0) / 6.0, 0.05) << "mean";
+      EXPECT_LT(std::abs(sum / n - quadratic_lap) / quadratic_lap, 0.05) << "mean";
     }
-    std::printf("laplacian of quadratic, jitter %.2f dp: worst relative error %.3e, mean %.6f (exact 6)\n", jitter,
-                worst, sum / n);
+    std::printf("laplacian of quadratic, jitter %.2f dp: worst relative error %.3e, mean %.6f (exact %g)\n", jitter,
+                worst, sum / n, quadratic_lap);
   }
   // The vector Laplacian is the scalar one per component.
   const auto b = make_block(dp, re);
   NeighbourList nl;
   build_neighbour_list(b.x, re, nl);
   std::vector<Vec> v(b.x.size());
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = Vec(quadratic(b.x[i]), -2.0 * quadratic(b.x[i]));
+  Vec scale = Vec::Ones();  // component a is scale[a] * quadratic
+  scale[1] = -2.0;
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = quadratic(b.x[i]) * scale;
   std::vector<Vec> lv;
   laplacian(b.x, nl, re, c.n0, c.lambda, v, lv);
   for (std::size_t i = 0; i < b.x.size(); ++i) {
     if (!b.interior[i]) continue;
-    EXPECT_LT((lv[i] - Vec(6.0, -12.0)).norm(), 1e-8);
+    EXPECT_LT((lv[i] - quadratic_lap * scale).norm(), 1e-8);
   }
 }
 
 // Errors of eq. 9 and eq. 12 on a smooth field fall as dp^2 on the lattice; print the observed rates.
+// (3D: dp from 0.04 to 0.01 on a 0.6 x 0.4 x 0.4 box, 1e5 particles at the finest.)
 TEST(Operators, ConvergenceAsDpHalves) {
   Real prev_g = 0, prev_l = 0, prev_c = 0;
-  for (const Real dp : {0.04, 0.02, 0.01, 0.005}) {
+#if MPSFSI_DIM == 2
+  const std::vector<Real> dps = {0.04, 0.02, 0.01, 0.005};
+  const Vec size = block_size;
+#else
+  const std::vector<Real> dps = {0.04, 0.02, 0.01};
+  const Vec size(0.6, 0.4, 0.4);
+#endif
+  for (const Real dp : dps) {
     const Real re_g = 2.1 * dp, re_l = 4.0 * dp;
     const auto cg = lattice_constants(dp, re_g);
     const auto cl = lattice_constants(dp, re_l);
-    const auto b = make_block(dp, 0.12);  // same interior region for every dp
+    const auto b = make_block(dp, 0.12, 0, 1, size);  // same interior region for every dp
     NeighbourList nl;
     build_neighbour_list(b.x, re_l, nl);
     const auto phi = field(b.x, smooth);
@@ -188,7 +235,7 @@ TEST(Operators, ConvergenceAsDpHalves) {
 }
 
 TEST(Operators, IsolatedParticleHasZeroGradientAndDensity) {
-  const std::vector<Vec> x = {Vec(0, 0), Vec(10, 10)};
+  const std::vector<Vec> x = {Vec::Zero(), Vec::Constant(10)};
   NeighbourList nl;
   build_neighbour_list(x, 0.1, nl);
   std::vector<Real> n;
