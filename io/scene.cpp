@@ -247,7 +247,7 @@ void check_scene_size(const CaseSpec& spec, const std::optional<std::size_t>& av
   if (need > static_cast<double>(*available))
     throw CaseError(fmt::format("{}: dp = {:g}: the case would have {} particles ({} fluid, {} solid, {} wall, {} dummy) "
                                 "and need about {} of memory, but this machine has {} available (MemAvailable in "
-                                "/proc/meminfo); expected a case that fits: a larger dp or smaller bodies and walls",
+                                "/proc/meminfo, or less under ulimit -v); expected a case that fits: a larger dp or smaller bodies and walls",
                                 spec.file, spec.dp, n.total(), n.fluid, n.solid, n.wall, n.dummy, show_bytes(need),
                                 show_bytes(static_cast<double>(*available))));
 }

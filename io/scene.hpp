@@ -61,8 +61,8 @@ ParticleCounts count_particles(const CaseSpec& spec);
 std::size_t estimate_memory_bytes(const CaseSpec& spec, const ParticleCounts& n);
 std::size_t estimate_memory_bytes(const CaseSpec& spec, const Scene& scene);
 
-/// The memory this machine has available for a new program [bytes]: MemAvailable of /proc/meminfo; none
-/// where that cannot be read.
+/// The memory this process can still take [bytes]: MemAvailable of /proc/meminfo, or less under a limit on
+/// the address space (ulimit -v: the limit minus VmSize); none where neither can be read.
 std::optional<std::size_t> available_memory_bytes();
 
 /// Build the scene of a case. Throws CaseError when two bodies' particles come closer than dp/2, and

@@ -1058,7 +1058,7 @@ TEST(Scene, TooLargeForTheMachineIsRefusedBeforeAllocating) {
   } catch (const CaseError& e) {
     EXPECT_THAT(e.what(), HasSubstr(dam_break + ": dp = 1e-05: the case would have 426845618 particles (426320000 fluid, 0 "
                                     "solid, 175202 wall, 350416 dummy) and need about "));
-    EXPECT_THAT(e.what(), HasSubstr("available (MemAvailable in /proc/meminfo); expected a case that fits: a larger dp"));
+    EXPECT_THAT(e.what(), HasSubstr("available (MemAvailable in /proc/meminfo, or less under ulimit -v); expected a case that fits: a larger dp"));
   }
   // The same check with a given available memory: the case at its own dp needs about 90 MiB.
   const CaseSpec normal = load_case(dam_break);
