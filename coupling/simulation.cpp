@@ -430,7 +430,10 @@ class RunLoop {
       sub = fmt::format(", subcycles {} (solid dt {:.2e} s)", summary_.last_subcycles, summary_.last_solid_dt);
     const std::string line = fmt::format("t = {:.5f} s ({:5.1f} %), step {}, {:.1f} steps/s, ETA {}, dt {:.2e} s ({}){}{}",
                                          t_, 100 * frac, step_, rate, format_duration(eta), dt_, limit_, ppe, sub);
-    if (periodic || final) {
+    // A step is logged once: the final line of a run that ends on a periodic step is not written again.
+    const bool due = (periodic || final) && step_ != logged_step_;
+    if (due) {
+      logged_step_ = step_;
       jsonl_ << fmt::format(
           "{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\",\"ppe_iterations\":{},"
           "\"ppe_residual\":{:.3g},\"subcycles\":{},\"wall\":{:.3f}}}\n",
@@ -446,7 +449,7 @@ class RunLoop {
         std::fflush(stdout);
         last_tty_ = Clock::now();
       }
-    } else if (periodic || final) {
+    } else if (due) {
       fmt::print("{}\n", line);
       std::fflush(stdout);  // a redirected log gets each line as it is printed
     }
@@ -600,6 +603,7 @@ class RunLoop {
   MPI_Comm comm_;
   std::vector<std::size_t> initial_fluid_;  ///< fluid particles per body at the start of the case
   std::string step_limit_ = "-";            ///< the dt limit of the step being taken
+  std::size_t logged_step_ = static_cast<std::size_t>(-1);  ///< the last step written to run.jsonl
   std::string log_error_;                   ///< rank 0: run.jsonl could not be written (reported at the next output)
   VtkSeriesWriter writer_;
   ProbeWriter probes_;

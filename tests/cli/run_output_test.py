@@ -5,7 +5,8 @@
   complete, no .tmp file is left (a 2 MiB tmpfs; skipped when this user may not mount one);
 - the progress lines reach a pipe as they are printed (not in 4 KB chunks at the end);
 - fragments.csv only for cases whose solids can break;
-- empty command-line values (--output '', --subcycles '') are refused with exit 2.
+- empty command-line values (--output '', --subcycles '') are refused with exit 2;
+- run.jsonl logs every step once (a run that ends on a logged step, a run that fails).
 
 Usage: run_output_test.py MPSFSI CASES_DIR WORK_DIR
 """
@@ -107,10 +108,28 @@ def empty_values_refused():
               f"exit {r.returncode}\n{r.stdout}")
 
 
+def run_log_lines_once():
+    import json
+    hydro = os.path.join(CASES, "hydrostatic.yaml")
+    runs = {"ends on step 100": (["--end-time", "0.1", "--set", "time.cfl=~", "--set", "time.dt_max=~", "--set",
+                                  "time.dt=1e-3"], 0),
+            "fails": (["--end-time", "0.35", "--set", "gravity=[0,9.81]", "--set",
+                       "domain={min: [-0.05, -0.05], max: [0.25, 0.32]}"], 3)}
+    for what, (args, code) in runs.items():
+        out = os.path.join(WORK, "jsonl_" + what.replace(" ", "_"))
+        r = run(["run", hydro, "--output", out, "--overwrite", "--quiet"] + args)
+        events = [json.loads(line) for line in open(os.path.join(out, "run.jsonl"))]
+        steps = [e["step"] for e in events if e["event"] == "step"]
+        ok = r.returncode == code and steps == sorted(set(steps))
+        ok = ok and sum(e["event"] in ("summary", "failure") for e in events) == 1
+        check(f"run.jsonl logs each step once ({what})", ok, f"exit {r.returncode}; steps {steps}")
+
+
 os.makedirs(WORK, exist_ok=True)
 full_disk()
 progress_is_flushed()
 fragments_only_when_breakable()
 empty_values_refused()
+run_log_lines_once()
 print(f"{passed} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)
