@@ -4,6 +4,7 @@
 #include "core/binary_io.hpp"
 #include "core/files.hpp"
 #include "core/kernel.hpp"
+#include "core/operators.hpp"
 #include "solid/solid_solver.hpp"
 
 #include <fmt/format.h>
@@ -56,9 +57,7 @@ void FsiInterface::initialize() {
   n0_solid_.clear();
   n0_solid_.reserve(xs.size());
   for (std::size_t k = 0; k < xs.size(); ++k) {
-    Real n = 0;
-    for (std::size_t q = nl.begin(k); q < nl.end(k); ++q) n += weight((xs[static_cast<std::size_t>(nl.index[q])] - xs[k]).norm(), re_);
-    n0_solid_[ids[k]] = n;
+    n0_solid_[ids[k]] = number_density_at(xs, nl, re_, k).n;
   }
   bodies_.clear();
   body_slot_.assign(p_.bodies.size(), -1);
@@ -101,11 +100,8 @@ void FsiInterface::prepare_fluid_boundary(const Real dt) {
   build_neighbour_list(solid_x_, re_, solid_nl_, solid_grid_);
   auto& offset = p_.scalar_field(opt_.offset_field);
   for (std::size_t k = 0; k < solid_x_.size(); ++k) {
-    Real n = 0;
-    for (std::size_t q = solid_nl_.begin(k); q < solid_nl_.end(k); ++q)
-      n += weight((solid_x_[static_cast<std::size_t>(solid_nl_.index[q])] - solid_x_[k]).norm(), re_);
     const auto i = static_cast<std::size_t>(solid_i_[k]);
-    offset[i] = n0_solid_.at(p_.global_id[i]) - n;
+    offset[i] = n0_solid_.at(p_.global_id[i]) - number_density_at(solid_x_, solid_nl_, re_, k).n;
   }
 }
 

@@ -10,6 +10,7 @@
 #include "core/binary_io.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
+#include "core/operators.hpp"
 #include "fluid/pressure_solver.hpp"
 #include "io/tank_motion_spec.hpp"
 
@@ -144,19 +145,10 @@ struct FluidSolver::Impl {
     const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
     const Real decay = std::exp(-lateral_friction * dt);
     const bool friction = lateral_friction > 0;
+    const auto takes_part = [&](const std::size_t j) { return roles[j] != Role::none; };
     for (std::size_t i = 0; i < n; ++i) {
       if (roles[i] != Role::fluid) continue;
-      Vec lap = Vec::Zero();
-      if (nu > 0) {
-        const Vec xi = p.position[i], vi = p.velocity[i];
-        for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
-          const auto j = static_cast<std::size_t>(nl.index[k]);
-          if (roles[j] == Role::none) continue;
-          const Real r2 = (p.position[j] - xi).squaredNorm();
-          if (!in_support(r2, re_l)) continue;
-          lap += (p.velocity[j] - vi) * (re_l / std::sqrt(r2) - 1.0);
-        }
-      }
+      const Vec lap = nu > 0 ? laplacian_sum_at(p.position, nl, re_l, i, p.velocity, takes_part) : Vec::Zero();
       p.velocity[i] += dt * (nu * a * lap + gravity);
       if (friction) {
         const Vec v_wall = motion.moving() ? motion.velocity_at(p.position[i], wall_omega) : Vec::Zero();
@@ -228,19 +220,12 @@ struct FluidSolver::Impl {
     if (!opt.density_offset_field.empty() && p.has_scalar_field(opt.density_offset_field))
       offset = &p.scalar_field(opt.density_offset_field);
     for (std::size_t i = 0; i < n; ++i) {
-      Real ni = 0;
-      int count = 0;
-      if (roles[i] != Role::none) {
-        const Vec xi = p.position[i];
-        for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
-          const Real r = (p.position[static_cast<std::size_t>(near.index[k])] - xi).norm();
-          ni += re_g / r - 1.0;
-          ++count;
-        }
-      }
+      // The near list holds exactly the pairs within re_g of particles that take part.
+      const DensityAndCount d = roles[i] != Role::none ? number_density_at(p.position, near, re_g, i) : DensityAndCount{};
+      Real ni = d.n;
       if (offset && roles[i] == Role::boundary) ni += (*offset)[i];
       n_star[i] = ni;
-      surface[i] = has_row(roles[i]) && ni < beta1 * lat_g.n0 && count < beta2 * lat_g.n_neighbours ? 1.0 : 0.0;
+      surface[i] = has_row(roles[i]) && ni < beta1 * lat_g.n0 && d.count < beta2 * lat_g.n_neighbours ? 1.0 : 0.0;
     }
   }
 
@@ -274,6 +259,7 @@ struct FluidSolver::Impl {
     const Real compress = 1.0 / (c * c * dt * dt);
     const Real source = kappa * rho / (dt * dt) / lat_g.n0;
     const Real dirichlet_diag = a * lat_l.n0 + compress;
+    const auto is_row = [&](const std::size_t j) { return has_row(roles[j]); };
     for (std::size_t r = sys.rows.begin; r < sys.rows.end; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       const std::size_t local = r - sys.rows.begin;
@@ -284,17 +270,13 @@ struct FluidSolver::Impl {
         sys.row_ptr[local + 1] = m;
         continue;
       }
-      const Vec xi = p.position[i];
       Real diag = compress;
       std::size_t diag_pos = std::numeric_limits<std::size_t>::max();
-      for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
-        const auto j = static_cast<std::size_t>(nl.index[k]);
-        if (!has_row(roles[j])) continue;
-        const Real r2 = (p.position[j] - xi).squaredNorm();
-        if (!in_support(r2, re_l)) continue;
-        const Real coef = a * (re_l / std::sqrt(r2) - 1.0);
+      // Row i of eq. 12's Laplacian (pair weights a w_ij) over the neighbours with pressure rows.
+      for_each_pair(p.position, nl, re_l, i, is_row, [&](const std::size_t j, const Vec&, Real, const Real w) {
+        const Real coef = a * w;
         diag += coef;
-        if (surface[j] != 0) continue;
+        if (surface[j] != 0) return;
         if (diag_pos == std::numeric_limits<std::size_t>::max() && j > i) {
           diag_pos = m;
           sys.col[m] = static_cast<GlobalId>(r);
@@ -302,7 +284,7 @@ struct FluidSolver::Impl {
         }
         sys.col[m] = row_of[j];
         sys.value[m++] = -coef;
-      }
+      });
       if (diag_pos == std::numeric_limits<std::size_t>::max()) {
         diag_pos = m;
         sys.col[m] = static_cast<GlobalId>(r);
@@ -343,44 +325,20 @@ struct FluidSolver::Impl {
     const std::size_t n = p.size();
     const Real c_grad = dim / lat_g.n0;
     dv.resize(n);
+    const auto is_row = [&](const std::size_t j) { return has_row(roles[j]); };
     for (std::size_t i = 0; i < n; ++i) {
       dv[i].setZero();
       if (roles[i] != Role::fluid) continue;
-      const Vec xi = p.position[i];
-      const Real pi = pressure[i];
-      Real p_min = pi;
-      for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
-        const auto j = static_cast<std::size_t>(near.index[k]);
-        if (has_row(roles[j])) p_min = std::min(p_min, pressure[j]);
-      }
-      Vec g = Vec::Zero();
       if (corrected && surface[i] == 0) {
-        Mat m = Mat::Zero();
-        Vec b = Vec::Zero();
-        for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
-          const auto j = static_cast<std::size_t>(near.index[k]);
-          if (!has_row(roles[j])) continue;
-          const Vec rij = p.position[j] - xi;
-          const Real r = rij.norm();
-          const Real w = re_g / r - 1.0;
-          const Vec e = rij / r;
-          m += w * e * e.transpose();
-          b += w * (pressure[j] - pi) / r * e;
-        }
-        const Real det = m.determinant(), tr = m.trace();
-        if (det > 1e-2 * tr * tr) {
-          dv[i] = -dt / rho * (m.inverse() * b);
+        // Eq. 14-15 where A_i is well conditioned (det A > 1e-2 tr(A)^d), else the p_min gradient below.
+        const CorrectedGradient c = corrected_gradient_at(p.position, near, re_g, i, pressure, 1e-2, is_row);
+        if (c.ok) {
+          dv[i] = -dt / rho * c.gradient;
           continue;
         }
       }
-      for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
-        const auto j = static_cast<std::size_t>(near.index[k]);
-        if (!has_row(roles[j])) continue;
-        const Vec rij = p.position[j] - xi;
-        const Real r2 = rij.squaredNorm();
-        g += (pressure[j] - p_min) / r2 * (re_g / std::sqrt(r2) - 1.0) * rij;
-      }
-      dv[i] = -dt / rho * c_grad * g;
+      const Real p_min = min_value_at(p.position, near, re_g, i, pressure, is_row);
+      dv[i] = -dt / rho * c_grad * gradient_sum_at(p.position, near, re_g, i, pressure, p_min, is_row);
     }
     for (std::size_t i = 0; i < n; ++i) {
       if (roles[i] != Role::fluid) continue;
