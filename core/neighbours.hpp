@@ -15,6 +15,9 @@ namespace mpsfsi {
 /// index[offset[i] .. offset[i+1]), in increasing order of j (or in cell order when built unsorted).
 struct NeighbourList {
   Real radius = 0;
+  /// Every pair lies inside the support of `radius` (in_support): set by lists filtered with it, so that the
+  /// operators skip the test (core/operators.hpp for_each_pair).
+  bool support_only = false;
   std::vector<std::size_t> offset;  ///< size n + 1
   std::vector<LocalIndex> index;
 

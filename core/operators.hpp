@@ -34,13 +34,14 @@ template <class Accept, class F>
 inline void for_each_pair(const std::vector<Vec>& x, const NeighbourList& nl, const Real re, const std::size_t i,
                           Accept&& accept, F&& f) {
   assert(re <= nl.radius * (1 + 1e-12));
+  const bool test_support = !(nl.support_only && re == nl.radius);
   const Vec xi = x[i];
   for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
     const auto j = static_cast<std::size_t>(nl.index[k]);
     if (!accept(j)) continue;
     const Vec rij = x[j] - xi;
     const Real r2 = rij.squaredNorm();
-    if (!in_support(r2, re)) continue;
+    if (test_support && !in_support(r2, re)) continue;
     f(j, rij, r2, re / std::sqrt(r2) - 1.0);
   }
 }
