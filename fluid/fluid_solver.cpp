@@ -11,7 +11,6 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "fluid/pressure_solver.hpp"
-#include "io/tank_motion_spec.hpp"
 
 #include <Eigen/LU>
 #include <fmt/format.h>
@@ -58,10 +57,7 @@ struct FluidSolver::Impl {
     lat_l = lattice_constants(dp, re_l);
     beta1 = spec.fluid.beta1;
     beta2 = spec.fluid.beta2;
-    corrected = spec.fluid.gradient == "corrected";
-    if (!corrected && spec.fluid.gradient != "min_pressure")
-      throw std::invalid_argument("fluid.gradient: unknown gradient '" + spec.fluid.gradient +
-                                  "' (expected min_pressure or corrected)");
+    corrected = spec.fluid.gradient == PressureGradient::corrected;
     gravity = spec.gravity;
     time = spec.time;
     // One fluid material: the PPE is written for one density.
@@ -90,7 +86,7 @@ struct FluidSolver::Impl {
     solver = make_pressure_solver(ps, comm);
     tolerance = ps.tolerance;
     density_tolerance = spec.fluid.density_tolerance;
-    preconditioner = ps.preconditioner;
+    preconditioner = std::string(to_string(ps.preconditioner));
 
     p.add_scalar_field("pressure", 0.0);
     p.add_scalar_field("free_surface", 0.0);
@@ -440,10 +436,10 @@ struct FluidSolver::Impl {
 
 Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu) {
   if (walls.gap <= 0) return 0;
-  if (walls.model == "poiseuille") return 12.0 * nu / (walls.gap * walls.gap);
-  if (walls.model == "stokes") return std::sqrt(2.0 * nu * 2.0 * pi * walls.frequency) / walls.gap;
-  throw std::invalid_argument("fluid.lateral_walls.model: unknown model '" + walls.model +
-                              "' (expected stokes or poiseuille)");
+  if (walls.model == LateralWallModel::poiseuille) return 12.0 * nu / (walls.gap * walls.gap);
+  if (walls.model == LateralWallModel::stokes) return std::sqrt(2.0 * nu * 2.0 * pi * walls.frequency) / walls.gap;
+  throw std::invalid_argument("fluid.lateral_walls.model: unknown model " + std::to_string(static_cast<int>(walls.model)) +
+                              " (expected one of: " + join_names(lateral_wall_model_names()) + ")");
 }
 
 FluidSolver::FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)

@@ -32,7 +32,6 @@
 #include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
-#include "io/tank_motion_spec.hpp"
 #include "solid/sources.hpp"
 
 #include <Eigen/Dense>
@@ -54,7 +53,7 @@ constexpr Real n_c = 0.5;  ///< surface threshold of eq. 48
 
 }  // namespace
 
-LameConstants lame_constants(const SolidMaterial& m, const SolidNumerics& numerics) {
+LameConstants lame_constants(const SolidMaterial& m, const SolidParameters& numerics) {
   LameConstants l;
   if (m.vp && m.vs) {
     l.mu = m.rho * *m.vs * *m.vs;
@@ -68,7 +67,7 @@ LameConstants lame_constants(const SolidMaterial& m, const SolidNumerics& numeri
   return l;
 }
 
-Real p_wave_speed(const SolidMaterial& m, const SolidNumerics& numerics) {
+Real p_wave_speed(const SolidMaterial& m, const SolidParameters& numerics) {
   const LameConstants l = lame_constants(m, numerics);
   return std::sqrt((l.lambda + 2 * l.mu) / m.rho);
 }
@@ -191,12 +190,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   gravity = spec.gravity;
   tank = make_tank_motion(spec.tank_motion);
   n_total = p.size();
-  const std::string& norm = spec.solid.normalisation;
-  if (norm != "particle" && norm != "lattice" && norm != "mean")
-    throw CaseError(fmt::format("{}: solid.normalisation = '{}': expected particle, lattice or mean", spec.file, norm));
-  if (spec.solid.volumetric_strain != "n0" && spec.solid.volumetric_strain != "corrected")
-    throw CaseError(fmt::format("{}: solid.volumetric_strain = '{}': expected n0 or corrected", spec.file,
-                                spec.solid.volumetric_strain));
+  const SolidNormalisation norm = spec.solid.normalisation;
 
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.kind[i] == ParticleKind::solid) {
@@ -285,7 +279,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   n_max = 0;
   for (std::size_t i = 0; i < ns; ++i) {
     n_max = std::max(n_max, n0[i]);
-    const Real n0_used = norm == "particle" ? n0[i] : norm == "lattice" ? n0_lattice : 0.5 * (n0[i] + n0_lattice);
+    const Real n0_used = norm == SolidNormalisation::particle ? n0[i] : norm == SolidNormalisation::lattice ? n0_lattice : 0.5 * (n0[i] + n0_lattice);
     inv_n0[i] = n0_used > 0 ? 1 / n0_used : 0;
     n_now[i] = n0[i];
   }
@@ -304,7 +298,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
       b_k[b] = volume * 2 * dim * mu[i] * b_wr[b] * b_inv_r0[b] * (inv_n0[i] + inv_n0[j]);
     }
   }
-  set_volumetric_weights(spec.solid.volumetric_strain == "corrected");
+  set_volumetric_weights(spec.solid.volumetric_strain == VolumetricStrain::corrected);
   b_intact.assign(b_j.size(), 1);
   b_ce.assign(b_j.size(), Vec::Zero());
 

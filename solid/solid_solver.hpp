@@ -52,9 +52,9 @@ struct LameConstants {
 /// The material law of the 2D model, the one place it is computed: from vp, vs when given (seed 000 §4),
 /// else eq. 4 (plane strain), reduced to plane stress with solid.plane_stress
 /// (lambda* = 2 lambda mu / (lambda + 2 mu)), with E / (1 - nu^2) in place of E for solid.wide_plate.
-LameConstants lame_constants(const SolidMaterial& m, const SolidNumerics& numerics);
+LameConstants lame_constants(const SolidMaterial& m, const SolidParameters& numerics);
 /// P-wave speed sqrt((lambda + 2 mu) / rho) of that law [m/s].
-Real p_wave_speed(const SolidMaterial& m, const SolidNumerics& numerics);
+Real p_wave_speed(const SolidMaterial& m, const SolidParameters& numerics);
 
 class SolidSolver {
  public:

@@ -23,8 +23,8 @@ CaseSpec block(const std::string& volumetric, const std::string& normalisation, 
   spec.solid_materials.push_back(test::wave_material("rock", 2200, vp, vs));
   spec.bodies.push_back(test::solid_body("ground", "rock", Vec(-2, -1.5), Vec(2, 0)));
   spec.solid.re = 1.9;
-  spec.solid.volumetric_strain = volumetric;
-  spec.solid.normalisation = normalisation;
+  spec.solid.volumetric_strain = *value_of(volumetric_strain_names(), volumetric);
+  spec.solid.normalisation = *value_of(solid_normalisation_names(), normalisation);
   return spec;
 }
 
