@@ -4,11 +4,17 @@
 #pragma once
 
 #include "core/enum_names.hpp"
+#include "core/geometry.hpp"
+#include "core/tank_motion.hpp"
+#include "core/time_spec.hpp"
 #include "core/types.hpp"
 
 #include <string>
+#include <vector>
 
 namespace mpsfsi {
+
+static_assert(dim == 2, "mpsfsi: fluid/ is 2D only; MPSFSI_DIM=3 builds core/ alone");
 
 struct FluidMaterial {
   std::string name;
@@ -89,6 +95,18 @@ struct FluidParameters {
   LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
   /// The largest share of a fluid body's particles that may leave the domain before the run stops (exit 3).
   Real max_loss = 0.05;
+};
+
+/// Everything the fluid solver (fluid/fluid_solver.hpp) is set up from; io/ builds it from a case
+/// (fluid_setup in io/case.hpp).
+struct FluidSetup {
+  Real dp = 0;                          ///< particle spacing l0 [m]
+  Vec gravity = Vec::Zero();
+  Rect domain;                          ///< fluid particles leaving it are removed
+  TimeSpec time;
+  std::vector<FluidMaterial> materials; ///< indexed by ParticleSet::material of the fluid particles
+  FluidParameters parameters;
+  TankMotionSpec tank_motion;           ///< moves the wall particles
 };
 
 }  // namespace mpsfsi

@@ -45,21 +45,22 @@ inline bool has_row(const Role r) { return r == Role::fluid || r == Role::bounda
 }  // namespace
 
 struct FluidSolver::Impl {
-  Impl(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
-      : p(particles), opt(options), motion(make_tank_motion(spec.tank_motion)) {
+  Impl(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
+      : p(particles), opt(options), motion(make_tank_motion(setup.tank_motion)) {
+    const FluidParameters& fluid = setup.parameters;
     MPI_Comm_rank(comm, &rank);
     this->comm = comm;
-    dp = spec.dp;
-    re_g = spec.fluid.re_gradient * dp;
-    re_l = spec.fluid.re_laplacian * dp;
+    dp = setup.dp;
+    re_g = fluid.re_gradient * dp;
+    re_l = fluid.re_laplacian * dp;
     r_max = std::max(re_g, re_l);
     lat_g = lattice_constants(dp, re_g);
     lat_l = lattice_constants(dp, re_l);
-    beta1 = spec.fluid.beta1;
-    beta2 = spec.fluid.beta2;
-    corrected = spec.fluid.gradient == PressureGradient::corrected;
-    gravity = spec.gravity;
-    time = spec.time;
+    beta1 = fluid.beta1;
+    beta2 = fluid.beta2;
+    corrected = fluid.gradient == PressureGradient::corrected;
+    gravity = setup.gravity;
+    time = setup.time;
     // One fluid material: the PPE is written for one density.
     int material = -1;
     for (std::size_t i = 0; i < p.size(); ++i) {
@@ -68,24 +69,24 @@ struct FluidSolver::Impl {
       if (p.material[i] != material)
         throw std::invalid_argument("the fluid solver supports one fluid material per case");
     }
-    if (material < 0 || material >= static_cast<int>(spec.fluid_materials.size()))
+    if (material < 0 || material >= static_cast<int>(setup.materials.size()))
       throw std::invalid_argument("the fluid solver needs fluid particles with a fluid material");
-    const FluidMaterial& m = spec.fluid_materials[static_cast<std::size_t>(material)];
+    const FluidMaterial& m = setup.materials[static_cast<std::size_t>(material)];
     rho = m.rho;
     nu = m.nu;
     c = m.c;
     kappa = m.kappa;
-    lateral_friction = lateral_wall_friction_rate(spec.fluid.lateral_walls, nu);
+    lateral_friction = lateral_wall_friction_rate(fluid.lateral_walls, nu);
 
     PressureSolverSettings ps;
-    ps.solver = spec.fluid.solver;
-    ps.preconditioner = spec.fluid.preconditioner;
-    ps.tolerance = spec.fluid.tolerance;
-    ps.max_iterations = spec.fluid.max_iterations;
-    ps.rebuild_every = spec.fluid.preconditioner_rebuild_every;
+    ps.solver = fluid.solver;
+    ps.preconditioner = fluid.preconditioner;
+    ps.tolerance = fluid.tolerance;
+    ps.max_iterations = fluid.max_iterations;
+    ps.rebuild_every = fluid.preconditioner_rebuild_every;
     solver = make_pressure_solver(ps, comm);
     tolerance = ps.tolerance;
-    density_tolerance = spec.fluid.density_tolerance;
+    density_tolerance = fluid.density_tolerance;
     preconditioner = std::string(to_string(ps.preconditioner));
 
     p.add_scalar_field("pressure", 0.0);
@@ -442,9 +443,9 @@ Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu)
                               " (expected one of: " + join_names(lateral_wall_model_names()) + ")");
 }
 
-FluidSolver::FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
-    : impl_(std::make_unique<Impl>(spec, particles, comm, options)) {
-  impl_->domain = spec.domain;
+FluidSolver::FluidSolver(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
+    : impl_(std::make_unique<Impl>(setup, particles, comm, options)) {
+  impl_->domain = setup.domain;
 }
 
 FluidSolver::~FluidSolver() = default;

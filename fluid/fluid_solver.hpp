@@ -7,7 +7,8 @@
 #include "core/particles.hpp"
 #include "fluid/pressure_solver.hpp"
 #include "core/kernel.hpp"
-#include "io/case.hpp"
+#include "core/time_spec.hpp"
+#include "fluid/fluid_parameters.hpp"
 
 #include <mpi.h>
 
@@ -63,8 +64,9 @@ Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, 
 class FluidSolver {
  public:
   /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`. All ranks of `comm`
-  /// construct it and call every member together.
-  FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options = {});
+  /// construct it and call every member together. io/ builds `setup` from a case (fluid_setup). Throws
+  /// std::invalid_argument when the setup does not fit the particles (e.g. two fluid materials).
+  FluidSolver(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options = {});
   ~FluidSolver();
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;

@@ -117,6 +117,13 @@ struct CaseSpec {
   int solid_material_index(const std::string& name) const;
 };
 
+/// What the fluid solver is set up from (fluid/fluid_parameters.hpp): the case's dp, gravity, domain, time,
+/// fluid materials, fluid parameters and tank motion.
+FluidSetup fluid_setup(const CaseSpec& spec);
+/// What the solid solver is set up from (solid/solid_parameters.hpp): the case's dp, gravity, solid
+/// materials, solid parameters, tank motion, bodies' angular velocities, solid loads and sources.
+SolidSetup solid_setup(const CaseSpec& spec);
+
 /// Parse and check a case file; `overrides` are "dotted.key=value" strings (--set), applied before
 /// checking. Throws CaseError with file, line, key and the expected form on any bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});

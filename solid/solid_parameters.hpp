@@ -5,6 +5,7 @@
 
 #include "core/enum_names.hpp"
 #include "core/geometry.hpp"
+#include "core/tank_motion.hpp"
 #include "core/types.hpp"
 
 #include <optional>
@@ -12,6 +13,8 @@
 #include <vector>
 
 namespace mpsfsi {
+
+static_assert(dim == 2, "mpsfsi: solid/ is 2D only; MPSFSI_DIM=3 builds core/ alone");
 
 struct SolidMaterial {
   std::string name;
@@ -108,6 +111,26 @@ struct SourceSpec {
   Real amplitude = 1;             ///< M0 [N m/m] (explosion) or F0 [N/m] (force)
   Real radius = 0;                ///< stencil radius [m]; the parser's default is 2 dp
   WaveletSpec wavelet;
+};
+
+/// The initial angular velocity of a body (bodies[].angular_velocity of the case), by body name.
+struct BodySpin {
+  std::string body;
+  Real angular_velocity = 0;  ///< [rad/s]
+};
+
+/// Everything the solid solver (solid/solid_solver.hpp) is set up from; io/ builds it from a case
+/// (solid_setup in io/case.hpp).
+struct SolidSetup {
+  std::string origin;                   ///< names the input in messages (the case file)
+  Real dp = 0;                          ///< particle spacing l0 [m]
+  Vec gravity = Vec::Zero();
+  std::vector<SolidMaterial> materials; ///< indexed by ParticleSet::material of the solid particles
+  SolidParameters parameters;
+  TankMotionSpec tank_motion;           ///< moves the clamped particles
+  std::vector<BodySpin> spins;          ///< every body of the case, in order
+  std::vector<SolidLoadSpec> loads;
+  std::vector<SourceSpec> sources;
 };
 
 }  // namespace mpsfsi

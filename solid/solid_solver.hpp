@@ -16,7 +16,8 @@
 #pragma once
 
 #include "core/particles.hpp"
-#include "io/case.hpp"
+#include "core/setup_error.hpp"
+#include "solid/solid_parameters.hpp"
 
 #include <memory>
 #include <string>
@@ -60,8 +61,9 @@ class SolidSolver {
  public:
   /// Builds the bonds (reference configuration) and registers the solid's fields on `particles`:
   /// rotation, angular_velocity, displacement, von_mises, solid_pressure, fragment, surface, solid_load.
-  /// Throws CaseError for inconsistent input (e.g. a load on an unknown body).
-  SolidSolver(const CaseSpec& spec, ParticleSet& particles);
+  /// io/ builds `setup` from a case (solid_setup). Throws SetupError (a std::invalid_argument) when the
+  /// setup does not fit the particles (e.g. a load on an unknown body, a load region without particles).
+  SolidSolver(const SolidSetup& setup, ParticleSet& particles);
   ~SolidSolver();
   SolidSolver(const SolidSolver&) = delete;
   SolidSolver& operator=(const SolidSolver&) = delete;

@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
     ParticleSet& p = scene.particles;
     // The physics runs on this rank alone (same trajectory for every rank count); only the variants'
     // solves are distributed.
-    FluidSolver fluid(spec, p, MPI_COMM_SELF);
+    FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
     std::vector<Real> p_prev, x0, x;
     LocalRows mine;
     Real t = 0;

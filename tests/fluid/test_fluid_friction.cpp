@@ -37,7 +37,7 @@ Vec velocity_after_step(const CaseSpec& spec, const Vec& v0, const Real t, const
   EXPECT_LT(i_fluid, p.size());
   EXPECT_EQ(p.n_of_kind(ParticleKind::fluid), 1u);
   p.velocity[i_fluid] = v0;
-  FluidSolver fluid(spec, p, MPI_COMM_SELF);
+  FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
   fluid.advance(t, dt);
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.kind[i] == ParticleKind::fluid) return p.velocity[i];

@@ -25,7 +25,7 @@ CaseSpec still_water_case() {
 struct OneStep {
   CaseSpec spec = still_water_case();
   Scene scene = build_scene(spec);
-  FluidSolver fluid{spec, scene.particles, MPI_COMM_SELF};
+  FluidSolver fluid{fluid_setup(spec), scene.particles, MPI_COMM_SELF};
   Real dt = 0;
   FluidStepReport report;
   OneStep() {

@@ -38,7 +38,7 @@ Real surface_residual(const std::string& volumetric, const std::string& normalis
   CaseSpec spec = block(volumetric, normalisation, vp, vs);
   Scene scene = build_scene(spec);
   auto& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   for (auto& x : p.position) x = Vec(x[0] * (1 + e0), x[1] * (1 + eyy));
   const std::vector<Vec> x_before = p.position;
   const Real dt = 1e-7;
@@ -72,7 +72,7 @@ TEST(VolumetricStrain, CorrectedKeepsMomentumAndEnergyOfASpinningBody) {
   spec.bodies[0].velocity = Vec(3, -1);
   spec.bodies[0].angular_velocity = 300;
   Scene scene = build_scene(spec);
-  SolidSolver solid(spec, scene.particles);
+  SolidSolver solid(solid_setup(spec), scene.particles);
   const SolidDiagnostics d0 = solid.diagnostics();
   const Real dt = 1e-5;
   Real e_min = d0.total(), e_max = d0.total();
