@@ -1,7 +1,7 @@
 // The incompressible free-surface fluid of seed 004 §4.1 and §4.3 (semi-implicit MPS, eq. 7-24), as a
 // participant of the run loop: the driver asks for a stable dt (eq. 52 plus the viscous limit) and
 // advances it one step at a time. Trilinos stays behind fluid/pressure_solver.hpp; this header
-// includes none of it.
+// includes none of it. Its parameters live in fluid/fluid_parameters.hpp (FluidSetup); it sees no case file.
 #pragma once
 
 #include "core/particles.hpp"

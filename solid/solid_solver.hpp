@@ -13,6 +13,7 @@
 // Optional Kelvin-Voigt bond damping (set_damping; off unless called, the coupled run loop calls it with
 // coupling.solid_damping): each bond adds k eta (e . (v_j - v_i)) e to its elastic force, with k the
 // bond's stiffness and e its direction, so the damping ratio of a mode is eta omega / 2.
+// Its parameters live in solid/solid_parameters.hpp (SolidSetup); it sees no case file.
 #pragma once
 
 #include "core/particles.hpp"
