@@ -202,7 +202,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
                scene.particles.size(), spec.time.end, out);
     if (const auto& lw = spec.fluid.lateral_walls; lw.gap > 0 && !spec.fluid_materials.empty())
       fmt::print("fluid: lateral-wall friction ({}, gap {:g} m{}): velocity relative to the tank decays at k = {:.4g} 1/s\n",
-                 lw.model, lw.gap, lw.model == "stokes" ? fmt::format(", {:.4g} Hz", lw.frequency) : std::string(),
+                 to_string(lw.model), lw.gap, lw.model == LateralWallModel::stokes ? fmt::format(", {:.4g} Hz", lw.frequency) : std::string(),
                  lateral_wall_friction_rate(lw, spec.fluid_materials.front().nu));
     if (spec.solid.wide_plate)
       for (const auto& m : spec.solid_materials)

@@ -11,6 +11,19 @@
 
 namespace mpsfsi {
 
+/// Axis-aligned rectangle [lo, hi] (a box in 3D): the regions of a case (domain, bodies, walls, loads).
+struct Rect {
+  Vec lo = Vec::Zero();
+  Vec hi = Vec::Zero();
+  Vec size() const { return hi - lo; }
+  bool contains(const Vec& x) const { return (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all(); }
+};
+
+/// True when the interiors of a and b intersect (touching edges do not overlap).
+inline bool overlaps(const Rect& a, const Rect& b) {
+  return (a.lo.array() < b.hi.array()).all() && (b.lo.array() < a.hi.array()).all();
+}
+
 /// Number of lattice cells that fit a length: round(length / dp), at least 1. Throws
 /// std::invalid_argument when length or dp is not positive.
 int lattice_cells(Real length, Real dp);

@@ -2,7 +2,7 @@
 // clockwise positive] and angular velocity omega(t) [rad/s] of a sine roll or of a measured angle series
 // (a table of time, angle). The fluid moves its walls with it, the solid its clamped particles, and the
 // probes use it to express displacements in the tank's frame. Knows nothing of case files:
-// make_tank_motion() in io/tank_motion_spec.hpp builds it from the case's TankMotionSpec. In 3D the tank
+// make_tank_motion() below builds it from the case's TankMotionSpec (filled by io/case_file.cpp). In 3D the tank
 // rolls about the line through the pivot along TankMotionParams::axis (default e_z; theta and omega stay
 // scalars, right-handed about the axis). With z up a roll axis is horizontal: -e_y rolls the x-z section
 // exactly as the 2D tank rolls in the x-y plane. Also holds the reader of time tables (read_time_table),
@@ -73,6 +73,19 @@ TimeTableColumn angle_table_column();
 /// the angles converted to radians. Throws TableError.
 void read_angle_table(const std::string& path, TankMotionParams& params);
 
+enum class TankMotionType { none, sine_roll, table };
+
+/// The tank motion as the case file gives it (key `tank_motion`, filled and checked by io/case_file.cpp).
+struct TankMotionSpec {
+  TankMotionType type = TankMotionType::none;
+  Vec pivot = Vec::Zero();      ///< rotation centre [m]
+  Real amplitude = 0;           ///< sine_roll: amplitude [rad] (case file in degrees)
+  Real period = 1;              ///< sine_roll: period [s]
+  std::string file;             ///< table: CSV of time [s], angle [deg], resolved relative to the case file
+  std::vector<Real> time;       ///< table: the rows read from `file` when the case was parsed, times [s] ...
+  std::vector<Real> angle;      ///< ... and angles [rad]
+};
+
 class TankMotion {
  public:
   /// No motion: theta = omega = 0.
@@ -114,5 +127,25 @@ class TankMotion {
   Real interpolate(Real t) const;
   TankMotionParams params_;
 };
+
+/// The tank motion of a case; a table is the one read and checked when the case was parsed.
+inline TankMotion make_tank_motion(const TankMotionSpec& spec) {
+  TankMotionParams q;
+  q.pivot = spec.pivot;
+  switch (spec.type) {
+    case TankMotionType::none: return TankMotion();
+    case TankMotionType::sine_roll:
+      q.type = TankMotionParams::Type::sine_roll;
+      q.amplitude = spec.amplitude;
+      q.period = spec.period;
+      break;
+    case TankMotionType::table:
+      q.type = TankMotionParams::Type::table;
+      q.time = spec.time;
+      q.angle = spec.angle;
+      break;
+  }
+  return TankMotion(std::move(q));
+}
 
 }  // namespace mpsfsi

@@ -26,7 +26,7 @@
 // stiff spring one step late, which pumps energy into the solid. Two generic measures reduce it: the fluid
 // sees the solid at mid-step (midstep_predictor) and the solid's own deformation does not enter the fluid's
 // density source (freeze_solid_density). What is left goes into the solid's particle-scale modes: the run
-// loop gives the solid's bonds a Kelvin-Voigt damping (CouplingSpec::solid_damping,
+// loop gives the solid's bonds a Kelvin-Voigt damping (CouplingParameters::solid_damping,
 // SolidSolver::set_damping) that damps those modes and leaves the first bending mode alone. The measured
 // interface work with and without each measure is in docs/validation.md (## Coupling). Clamped particles get no
 // load and are no j* in eq. 50 (exclude_clamped). load_relaxation (default 1, off) under-relaxes the load.

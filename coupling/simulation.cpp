@@ -92,8 +92,12 @@ class RunLoop {
     tty_ = log_ && isatty(fileno(stdout));
     const bool has_fluid = p_.n_of_kind(ParticleKind::fluid) > 0, has_solid = p_.n_of_kind(ParticleKind::solid) > 0;
     if (has_fluid)
-      fluid_ = std::make_unique<FluidSolver>(spec, p_, comm, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
-    if (has_solid) solid_ = std::make_unique<SolidSolver>(spec, p_);
+      fluid_ = std::make_unique<FluidSolver>(fluid_setup(spec), p_, comm, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
+    try {
+      if (has_solid) solid_ = std::make_unique<SolidSolver>(solid_setup(spec), p_);
+    } catch (const SetupError& e) {  // the case does not fit the scene: bad input (exit 2), as before the solver
+      throw CaseError(e.what());
+    }
     if (solid_ && rank_ == 0) solid_->set_output_directory(settings.output_dir, appends("fragments.csv"));
     if (fluid_ && solid_) {
       FsiOptions fo;

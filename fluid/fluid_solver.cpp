@@ -12,7 +12,6 @@
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
 #include "fluid/pressure_solver.hpp"
-#include "io/tank_motion_spec.hpp"
 
 #include <Eigen/LU>
 #include <fmt/format.h>
@@ -47,24 +46,22 @@ inline bool has_row(const Role r) { return r == Role::fluid || r == Role::bounda
 }  // namespace
 
 struct FluidSolver::Impl {
-  Impl(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
-      : p(particles), opt(options), motion(make_tank_motion(spec.tank_motion)) {
+  Impl(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
+      : p(particles), opt(options), motion(make_tank_motion(setup.tank_motion)) {
+    const FluidParameters& fluid = setup.parameters;
     MPI_Comm_rank(comm, &rank);
     this->comm = comm;
-    dp = spec.dp;
-    re_g = spec.fluid.re_gradient * dp;
-    re_l = spec.fluid.re_laplacian * dp;
+    dp = setup.dp;
+    re_g = fluid.re_gradient * dp;
+    re_l = fluid.re_laplacian * dp;
     r_max = std::max(re_g, re_l);
     lat_g = lattice_constants(dp, re_g);
     lat_l = lattice_constants(dp, re_l);
-    beta1 = spec.fluid.beta1;
-    beta2 = spec.fluid.beta2;
-    corrected = spec.fluid.gradient == "corrected";
-    if (!corrected && spec.fluid.gradient != "min_pressure")
-      throw std::invalid_argument("fluid.gradient: unknown gradient '" + spec.fluid.gradient +
-                                  "' (expected min_pressure or corrected)");
-    gravity = spec.gravity;
-    time = spec.time;
+    beta1 = fluid.beta1;
+    beta2 = fluid.beta2;
+    corrected = fluid.gradient == PressureGradient::corrected;
+    gravity = setup.gravity;
+    time = setup.time;
     // One fluid material: the PPE is written for one density.
     int material = -1;
     for (std::size_t i = 0; i < p.size(); ++i) {
@@ -73,25 +70,25 @@ struct FluidSolver::Impl {
       if (p.material[i] != material)
         throw std::invalid_argument("the fluid solver supports one fluid material per case");
     }
-    if (material < 0 || material >= static_cast<int>(spec.fluid_materials.size()))
+    if (material < 0 || material >= static_cast<int>(setup.materials.size()))
       throw std::invalid_argument("the fluid solver needs fluid particles with a fluid material");
-    const FluidMaterial& m = spec.fluid_materials[static_cast<std::size_t>(material)];
+    const FluidMaterial& m = setup.materials[static_cast<std::size_t>(material)];
     rho = m.rho;
     nu = m.nu;
     c = m.c;
     kappa = m.kappa;
-    lateral_friction = lateral_wall_friction_rate(spec.fluid.lateral_walls, nu);
+    lateral_friction = lateral_wall_friction_rate(fluid.lateral_walls, nu);
 
     PressureSolverSettings ps;
-    ps.solver = spec.fluid.solver;
-    ps.preconditioner = spec.fluid.preconditioner;
-    ps.tolerance = spec.fluid.tolerance;
-    ps.max_iterations = spec.fluid.max_iterations;
-    ps.rebuild_every = spec.fluid.preconditioner_rebuild_every;
+    ps.solver = fluid.solver;
+    ps.preconditioner = fluid.preconditioner;
+    ps.tolerance = fluid.tolerance;
+    ps.max_iterations = fluid.max_iterations;
+    ps.rebuild_every = fluid.preconditioner_rebuild_every;
     solver = make_pressure_solver(ps, comm);
     tolerance = ps.tolerance;
-    density_tolerance = spec.fluid.density_tolerance;
-    preconditioner = ps.preconditioner;
+    density_tolerance = fluid.density_tolerance;
+    preconditioner = std::string(to_string(ps.preconditioner));
 
     p.add_scalar_field("pressure", 0.0);
     p.add_scalar_field("free_surface", 0.0);
@@ -399,15 +396,15 @@ struct FluidSolver::Impl {
 
 Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu) {
   if (walls.gap <= 0) return 0;
-  if (walls.model == "poiseuille") return 12.0 * nu / (walls.gap * walls.gap);
-  if (walls.model == "stokes") return std::sqrt(2.0 * nu * 2.0 * pi * walls.frequency) / walls.gap;
-  throw std::invalid_argument("fluid.lateral_walls.model: unknown model '" + walls.model +
-                              "' (expected stokes or poiseuille)");
+  if (walls.model == LateralWallModel::poiseuille) return 12.0 * nu / (walls.gap * walls.gap);
+  if (walls.model == LateralWallModel::stokes) return std::sqrt(2.0 * nu * 2.0 * pi * walls.frequency) / walls.gap;
+  throw std::invalid_argument("fluid.lateral_walls.model: unknown model " + std::to_string(static_cast<int>(walls.model)) +
+                              " (expected one of: " + join_names(lateral_wall_model_names()) + ")");
 }
 
-FluidSolver::FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
-    : impl_(std::make_unique<Impl>(spec, particles, comm, options)) {
-  impl_->domain = spec.domain;
+FluidSolver::FluidSolver(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
+    : impl_(std::make_unique<Impl>(setup, particles, comm, options)) {
+  impl_->domain = setup.domain;
 }
 
 FluidSolver::~FluidSolver() = default;

@@ -1,13 +1,14 @@
 // The incompressible free-surface fluid of seed 004 §4.1 and §4.3 (semi-implicit MPS, eq. 7-24), as a
 // participant of the run loop: the driver asks for a stable dt (eq. 52 plus the viscous limit) and
 // advances it one step at a time. Trilinos stays behind fluid/pressure_solver.hpp; this header
-// includes none of it.
+// includes none of it. Its parameters live in fluid/fluid_parameters.hpp (FluidSetup); it sees no case file.
 #pragma once
 
 #include "core/particles.hpp"
 #include "fluid/pressure_solver.hpp"
 #include "core/kernel.hpp"
-#include "io/case.hpp"
+#include "core/time_spec.hpp"
+#include "fluid/fluid_parameters.hpp"
 
 #include <mpi.h>
 
@@ -63,8 +64,9 @@ Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, 
 class FluidSolver {
  public:
   /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`. All ranks of `comm`
-  /// construct it and call every member together.
-  FluidSolver(const CaseSpec& spec, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options = {});
+  /// construct it and call every member together. io/ builds `setup` from a case (fluid_setup). Throws
+  /// std::invalid_argument when the setup does not fit the particles (e.g. two fluid materials).
+  FluidSolver(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options = {});
   ~FluidSolver();
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;

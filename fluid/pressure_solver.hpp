@@ -6,6 +6,7 @@
 #pragma once
 
 #include "core/types.hpp"
+#include "fluid/fluid_parameters.hpp"
 
 #include <mpi.h>
 
@@ -21,11 +22,11 @@ class BinaryWriter;
 class BinaryReader;
 
 struct PressureSolverSettings {
-  std::string solver = "cg";              ///< cg | gmres
-  /// muelu | chebyshev | ilu | jacobi | sgs | ssor | none. sgs and ssor (symmetric Gauss-Seidel with
+  KrylovSolver solver = KrylovSolver::cg;
+  /// sgs and ssor (symmetric Gauss-Seidel with
   /// relaxation 1 and 1.4) run CG on the split-preconditioned system by Eisenstat's trick (one pass over
   /// the matrix per iteration), on each rank's block.
-  std::string preconditioner = "muelu";
+  Preconditioner preconditioner = Preconditioner::muelu;
   Real tolerance = 1e-8;                  ///< relative residual ||b - Ax|| / ||b||
   int max_iterations = 500;
   /// Full preconditioner setup every N solves (1: every solve). In between, MueLu and ILU are applied as

@@ -194,14 +194,14 @@ class TrilinosPressureSolver final : public PressureSolver {
     MPI_Comm_dup(comm, &raw_comm_);
     n_ranks_ = comm_->getSize();
     rank_ = comm_->getRank();
-    static const char* solvers[] = {"cg", "gmres"};
-    static const char* precs[] = {"muelu", "chebyshev", "ilu", "jacobi", "sgs", "ssor", "none"};
-    if (std::find(std::begin(solvers), std::end(solvers), s.solver) == std::end(solvers))
-      throw std::invalid_argument("fluid.solver: unknown solver '" + s.solver + "' (expected cg or gmres)");
-    if (std::find(std::begin(precs), std::end(precs), s.preconditioner) == std::end(precs))
-      throw std::invalid_argument("fluid.preconditioner: unknown preconditioner '" + s.preconditioner +
-                                  "' (expected muelu, chebyshev, ilu, jacobi, sgs, ssor or none)");
-    if (s.preconditioner == "ssor") omega_ = 1.4;  // measured best on the dam break (docs/performance.md)
+    if (name_of(krylov_solver_names(), s.solver) == "?")
+      throw std::invalid_argument("fluid.solver: unknown solver " + std::to_string(static_cast<int>(s.solver)) +
+                                  " (expected one of: " + join_names(krylov_solver_names()) + ")");
+    if (name_of(preconditioner_names(), s.preconditioner) == "?")
+      throw std::invalid_argument("fluid.preconditioner: unknown preconditioner " +
+                                  std::to_string(static_cast<int>(s.preconditioner)) + " (expected one of: " +
+                                  join_names(preconditioner_names()) + ")");
+    if (s.preconditioner == Preconditioner::ssor) omega_ = 1.4;  // measured best on the dam break (docs/performance.md)
     rebuild_every_ = std::max(1, s.rebuild_every);
     for (const auto& [key, value] : s.parameters) {
       if (key == "sgs: omega")
@@ -217,9 +217,9 @@ class TrilinosPressureSolver final : public PressureSolver {
     params->set("Convergence Tolerance", s.tolerance);
     params->set("Maximum Iterations", s.max_iterations);
     params->set("Implicit Residual Scaling", std::string("Norm of RHS"));
-    if (s.solver == "gmres") params->set("Explicit Residual Scaling", std::string("Norm of RHS"));
+    if (s.solver == KrylovSolver::gmres) params->set("Explicit Residual Scaling", std::string("Norm of RHS"));
     params->set("Verbosity", 0);
-    std::string manager = s.solver == "cg" ? "PSEUDOBLOCK CG" : "PSEUDOBLOCK GMRES";
+    std::string manager = s.solver == KrylovSolver::cg ? "PSEUDOBLOCK CG" : "PSEUDOBLOCK GMRES";
     if (belos_params_.isParameter("manager")) {  // expert: "belos: manager" = a Belos solver name
       manager = belos_params_.get<std::string>("manager");
       belos_params_.remove("manager");
@@ -229,7 +229,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     belos_ = factory.create(manager, params);
     belos_list_ = params;
     belos_tolerance_ = s.tolerance;
-    eisenstat_ = (s.preconditioner == "sgs" || s.preconditioner == "ssor") && !sgs_ifpack2_;
+    eisenstat_ = (s.preconditioner == Preconditioner::sgs || s.preconditioner == Preconditioner::ssor) && !sgs_ifpack2_;
   }
 
   ~TrilinosPressureSolver() override {
@@ -267,7 +267,7 @@ class TrilinosPressureSolver final : public PressureSolver {
 
   void save_state(BinaryWriter& out) const override {
     out.section("pressure_solver");
-    out.string(settings_.preconditioner);
+    out.string(std::string(to_string(settings_.preconditioner)));
     out.u64(solves_since_setup_);
     out.i64(iterations_after_setup_);
     out.boolean(force_setup_);
@@ -275,7 +275,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     out.u64(map_rows_);
     out.u64(n_solves_);
     // A kept preconditioner: the matrix it was set up on (one rank: all rows), to build it again on load.
-    const bool kept = keeps_setup() && !(settings_.preconditioner == "muelu" ? muelu_.is_null() : ifpack_.is_null());
+    const bool kept = keeps_setup() && !(settings_.preconditioner == Preconditioner::muelu ? muelu_.is_null() : ifpack_.is_null());
     const bool saved = kept && n_ranks_ == 1;
     out.boolean(kept);
     out.boolean(saved);
@@ -315,7 +315,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     }
     restore_pending_ = false;
     map_rows_ = rows;
-    if (prec != settings_.preconditioner) {  // a restart that changes the preconditioner: a fresh start
+    if (prec != to_string(settings_.preconditioner)) {  // a restart that changes the preconditioner: a fresh start
       solves_since_setup_ = 0;
       iterations_after_setup_ = 0;
       force_setup_ = true;
@@ -373,7 +373,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     t0 = Clock::now();
     auto problem = rcp(new Belos::LinearProblem<Scalar, MV, OP>(A_, x_, b_));
     if (!prec.is_null()) {
-      if (settings_.solver == "cg")
+      if (settings_.solver == KrylovSolver::cg)
         problem->setLeftPrec(prec);
       else
         problem->setRightPrec(prec);
@@ -581,7 +581,7 @@ class TrilinosPressureSolver final : public PressureSolver {
 
   /// A preconditioner (muelu, ilu) kept as built between setups, which a checkpoint saves by its matrix.
   bool keeps_setup() const {
-    return rebuild_every_ > 1 && (settings_.preconditioner == "muelu" || settings_.preconditioner == "ilu");
+    return rebuild_every_ > 1 && (settings_.preconditioner == Preconditioner::muelu || settings_.preconditioner == Preconditioner::ilu);
   }
 
   /// The matrix of `sys` on one rank (the setup matrix a restart rebuilds a kept preconditioner from).
@@ -622,14 +622,14 @@ class TrilinosPressureSolver final : public PressureSolver {
   /// The preconditioner for this solve: a full setup when due, else the kept one (right after a restart
   /// rebuilt, identically, from the matrix it was set up on).
   RCP<OP> setup_preconditioner(const LocalRows& sys) {
-    const std::string& p = settings_.preconditioner;
-    if (p == "none") return Teuchos::null;
+    const Preconditioner p = settings_.preconditioner;
+    if (p == Preconditioner::none) return Teuchos::null;
     // A restart rebuilds the kept preconditioner unless the row count changed since its setup (the
     // original run dropped it then, as build_matrix does).
     const bool restore = restore_pending_ && setup_sys_.n_global_rows == sys.n_global_rows;
     restore_pending_ = false;
     // Chebyshev keeps only its eigenvalue bound (reset with the row map).
-    const bool missing = p == "muelu" ? muelu_.is_null() : p == "chebyshev" ? !(lambda_max_ > 0) : ifpack_.is_null();
+    const bool missing = p == Preconditioner::muelu ? muelu_.is_null() : p == Preconditioner::chebyshev ? !(lambda_max_ > 0) : ifpack_.is_null();
     const bool due = force_setup_ || solves_since_setup_ >= static_cast<std::size_t>(rebuild_every_) ||
                      (missing && !restore);
     // The power iterations of Chebyshev (also MueLu's smoother) start from Tpetra's randomize(), which
@@ -637,7 +637,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     // came before (a restarted run then reproduces the uninterrupted one bit for bit).
     std::srand(1);
     if (due && keeps_setup()) setup_sys_ = sys;  // saved by a checkpoint to rebuild the kept preconditioner
-    if (p == "muelu") {
+    if (p == Preconditioner::muelu) {
       if (due) {
         muelu_ = make_muelu(A_);
         mark_setup();
@@ -649,16 +649,16 @@ class TrilinosPressureSolver final : public PressureSolver {
     }
     // Jacobi and SGS: always on the new matrix. Chebyshev: on the new matrix, with the kept eigenvalue
     // estimate between full setups. ILU(0): kept as built.
-    if (p == "ilu" && !due && !restore) return ifpack_;
-    const RCP<Matrix> A = p == "ilu" && !due ? serial_matrix(setup_sys_) : A_;
+    if (p == Preconditioner::ilu && !due && !restore) return ifpack_;
+    const RCP<Matrix> A = p == Preconditioner::ilu && !due ? serial_matrix(setup_sys_) : A_;
     Teuchos::ParameterList params;
     std::string type;
-    if (p == "jacobi" || p == "sgs" || p == "ssor") {  // sgs / ssor here only with "sgs: ifpack2" = true
+    if (p == Preconditioner::jacobi || p == Preconditioner::sgs || p == Preconditioner::ssor) {  // sgs / ssor here only with "sgs: ifpack2" = true
       type = "RELAXATION";
-      params.set("relaxation: type", std::string(p == "jacobi" ? "Jacobi" : "Symmetric Gauss-Seidel"));
+      params.set("relaxation: type", std::string(p == Preconditioner::jacobi ? "Jacobi" : "Symmetric Gauss-Seidel"));
       params.set("relaxation: sweeps", 1);
-      if (p != "jacobi") params.set("relaxation: damping factor", omega_);
-    } else if (p == "chebyshev") {
+      if (p != Preconditioner::jacobi) params.set("relaxation: damping factor", omega_);
+    } else if (p == Preconditioner::chebyshev) {
       type = "CHEBYSHEV";
       params.set("chebyshev: degree", 3);
       if (!due && lambda_max_ > 0) {  // no power iterations: the last estimate
@@ -680,12 +680,12 @@ class TrilinosPressureSolver final : public PressureSolver {
     ifpack_->setParameters(params);
     ifpack_->initialize();
     ifpack_->compute();
-    if (p == "chebyshev" && (due || lambda_max_ <= 0)) {
+    if (p == Preconditioner::chebyshev && (due || lambda_max_ <= 0)) {
       using Cheb = Ifpack2::Chebyshev<Tpetra::RowMatrix<Scalar>>;
       if (const auto* cheb = dynamic_cast<const Cheb*>(ifpack_.get())) lambda_max_ = cheb->getLambdaMaxForApply();
     }
     if (due) mark_setup();
-    precond_bytes_ = p == "ilu" ? A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO)) : 2 * x_->getLocalLength() * sizeof(Scalar);
+    precond_bytes_ = p == Preconditioner::ilu ? A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO)) : 2 * x_->getLocalLength() * sizeof(Scalar);
     return ifpack_;
   }
 

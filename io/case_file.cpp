@@ -524,6 +524,11 @@ class MapReader {
     const auto f = optional(key);
     return f ? to_choice(src_, *f, options) : fallback;
   }
+  /// An option enum read by the names of its table (e.g. fluid/fluid_parameters.hpp preconditioner_names()).
+  template <class E>
+  E option(const std::string& key, const E fallback, const NameTable<E>& table) {
+    return *value_of(table, choice(key, std::string(name_of(table, fallback)), names_of(table)));
+  }
   Vec vec(const std::string& key, const std::string& form) { return to_vec(src_, required(key, form), form); }
   Vec vec(const std::string& key, const Vec& fallback, const std::string& form) {
     const auto f = optional(key);
@@ -898,7 +903,7 @@ void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
     src.fail(r.at("type"), fmt::format("tank_motion.type = {}: expected walls (a tank) to move", type));
 }
 
-void read_coupling(MapReader r, CouplingSpec& c) {
+void read_coupling(MapReader r, CouplingParameters& c) {
   const std::string form =
       fmt::format("a positive integer up to {} or auto (solid sub-steps per fluid step)", max_subcycles);
   if (const auto f = r.optional("subcycles")) {
@@ -917,8 +922,8 @@ void read_lateral_walls(MapReader r, const TankMotionSpec& motion, LateralWallFr
   if (!r.field().node.IsDefined() || r.field().node.IsNull()) return;
   w.gap = r.number("gap", positive, "a positive number (distance between the front and back walls) [m]");
   if (w.gap < min_gap) r.source().expected(r.at("gap"), fmt::format("a gap of at least {:g} m (distance between the front and back walls) [m]", min_gap));
-  w.model = r.choice("model", w.model, {"stokes", "poiseuille"});
-  if (w.model == "stokes") {
+  w.model = r.option("model", w.model, lateral_wall_model_names());
+  if (w.model == LateralWallModel::stokes) {
     const auto f = r.optional_number("frequency", positive, "a positive number (oscillation frequency) [Hz]");
     if (f)
       w.frequency = *f;
@@ -958,14 +963,14 @@ Real stencil_radius(MapReader& r, const std::string& key, const Real dp) {
   return radius;
 }
 
-void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidNumerics& n) {
+void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidParameters& n) {
   n.re_gradient = radius_in_dp(r, "re_gradient", n.re_gradient, "effective radius of density and gradient");
   n.re_laplacian = radius_in_dp(r, "re_laplacian", n.re_laplacian, "effective radius of the Laplacian");
   n.beta1 = r.number("beta1", n.beta1, in_half_open(0, 1), "a number in (0, 1] (free surface: n_i < beta1 n0)");
   n.beta2 = r.number("beta2", n.beta2, in_half_open(0, 1), "a number in (0, 1] (free surface: N_i < beta2 N0)");
-  n.gradient = r.choice("gradient", n.gradient, {"min_pressure", "corrected"});
-  n.solver = r.choice("solver", n.solver, {"cg", "gmres"});
-  n.preconditioner = r.choice("preconditioner", n.preconditioner, {"muelu", "chebyshev", "ilu", "jacobi", "sgs", "ssor", "none"});
+  n.gradient = r.option("gradient", n.gradient, pressure_gradient_names());
+  n.solver = r.option("solver", n.solver, krylov_solver_names());
+  n.preconditioner = r.option("preconditioner", n.preconditioner, preconditioner_names());
   n.tolerance = r.number("tolerance", n.tolerance, in_open(0, 1), "a number in (0, 1) (relative residual of the pressure solve)");
   n.density_tolerance = r.number("density_tolerance", n.density_tolerance, [](Real x) { return x >= 0 && x < 1; },
                                  "a number in [0, 1) (RMS density error r dt^2 / rho at which the pressure solve "
@@ -983,7 +988,7 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidNumeric
   r.finish();
 }
 
-void read_solid_numerics(MapReader r, const std::vector<SolidMaterial>& materials, const Real end, SolidNumerics& n) {
+void read_solid_numerics(MapReader r, const std::vector<SolidMaterial>& materials, const Real end, SolidParameters& n) {
   n.re = radius_in_dp(r, "re", n.re, "effective radius of the bonds");
   n.dt = r.optional_number("dt", positive, "a positive number (solid time step) [s]");
   if (n.dt) check_time_step(r, "dt", *n.dt, end);
@@ -1003,8 +1008,8 @@ void read_solid_numerics(MapReader r, const std::vector<SolidMaterial>& material
   n.dt_factor = r.number("dt_factor", n.dt_factor, in_half_open(0, 1), "a number in (0, 1] (stable dt = dt_factor dp / c_p)");
   n.contact_stiffness = r.number("contact_stiffness", n.contact_stiffness, non_negative,
                                  "a non-negative number (contact spring / nearest-neighbour bond stiffness)");
-  n.normalisation = r.choice("normalisation", n.normalisation, {"particle", "lattice", "mean"});
-  n.volumetric_strain = r.choice("volumetric_strain", n.volumetric_strain, {"n0", "corrected"});
+  n.normalisation = r.option("normalisation", n.normalisation, solid_normalisation_names());
+  n.volumetric_strain = r.option("volumetric_strain", n.volumetric_strain, volumetric_strain_names());
   r.finish();
 }
 

@@ -3,7 +3,7 @@
 
 #include "core/files.hpp"
 #include "core/kernel.hpp"
-#include "io/tank_motion_spec.hpp"
+#include "core/tank_motion.hpp"
 
 #include <fmt/format.h>
 

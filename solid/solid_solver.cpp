@@ -32,7 +32,6 @@
 #include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
-#include "io/tank_motion_spec.hpp"
 #include "solid/sources.hpp"
 
 #include <Eigen/Dense>
@@ -54,7 +53,7 @@ constexpr Real n_c = 0.5;  ///< surface threshold of eq. 48
 
 }  // namespace
 
-LameConstants lame_constants(const SolidMaterial& m, const SolidNumerics& numerics) {
+LameConstants lame_constants(const SolidMaterial& m, const SolidParameters& numerics) {
   LameConstants l;
   if (m.vp && m.vs) {
     l.mu = m.rho * *m.vs * *m.vs;
@@ -68,7 +67,7 @@ LameConstants lame_constants(const SolidMaterial& m, const SolidNumerics& numeri
   return l;
 }
 
-Real p_wave_speed(const SolidMaterial& m, const SolidNumerics& numerics) {
+Real p_wave_speed(const SolidMaterial& m, const SolidParameters& numerics) {
   const LameConstants l = lame_constants(m, numerics);
   return std::sqrt((l.lambda + 2 * l.mu) / m.rho);
 }
@@ -144,7 +143,7 @@ struct SolidSolver::Impl {
   bool csv_started = false;
   bool breakable = false;  ///< some material has a fracture strain: fragments.csv is written
 
-  Impl(const CaseSpec& spec, ParticleSet& particles);
+  Impl(const SolidSetup& setup, ParticleSet& particles);
   std::size_t n() const { return pid.size(); }
   void gather();
   void scatter();
@@ -181,22 +180,18 @@ struct SolidSolver::Impl {
   SolidStepReport advance(Real t, Real dt);
 };
 
-SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(particles) {
-  dp = spec.dp;
+SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles) : p(particles) {
+  const SolidParameters& solid = setup.parameters;
+  dp = setup.dp;
   volume = std::pow(dp, dim);
-  const Real re = spec.solid.re * dp;
+  const Real re = solid.re * dp;
   n0_lattice = lattice_constants(dp, re).n0;
-  dt_factor = spec.solid.dt_factor;
-  plane_stress = spec.solid.plane_stress;
-  gravity = spec.gravity;
-  tank = make_tank_motion(spec.tank_motion);
+  dt_factor = solid.dt_factor;
+  plane_stress = solid.plane_stress;
+  gravity = setup.gravity;
+  tank = make_tank_motion(setup.tank_motion);
   n_total = p.size();
-  const std::string& norm = spec.solid.normalisation;
-  if (norm != "particle" && norm != "lattice" && norm != "mean")
-    throw CaseError(fmt::format("{}: solid.normalisation = '{}': expected particle, lattice or mean", spec.file, norm));
-  if (spec.solid.volumetric_strain != "n0" && spec.solid.volumetric_strain != "corrected")
-    throw CaseError(fmt::format("{}: solid.volumetric_strain = '{}': expected n0 or corrected", spec.file,
-                                spec.solid.volumetric_strain));
+  const SolidNormalisation norm = solid.normalisation;
 
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.kind[i] == ParticleKind::solid) {
@@ -226,26 +221,26 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   uf_parent.resize(ns);
 
   std::vector<LameConstants> lame;
-  for (const auto& m : spec.solid_materials) lame.push_back(lame_constants(m, spec.solid));
+  for (const auto& m : setup.materials) lame.push_back(lame_constants(m, solid));
   Real mu_max = 0;
   for (std::size_t k = 0; k < ns; ++k) {
     const auto i = static_cast<std::size_t>(pid[k]);
     const int mat = p.material[i];
-    if (mat < 0 || mat >= static_cast<int>(spec.solid_materials.size()))
-      throw CaseError(fmt::format("{}: solid particle {} has no solid material", spec.file, p.global_id[i]));
-    const auto& m = spec.solid_materials[static_cast<std::size_t>(mat)];
+    if (mat < 0 || mat >= static_cast<int>(setup.materials.size()))
+      throw SetupError(fmt::format("{}: solid particle {} has no solid material", setup.origin, p.global_id[i]));
+    const auto& m = setup.materials[static_cast<std::size_t>(mat)];
     x0[k] = p.position[i];
     mass[k] = m.rho * volume;
     inertia[k] = m.rho * volume * dp * dp / 6;  // eq. 44
     lambda[k] = lame[static_cast<std::size_t>(mat)].lambda;
     mu[k] = lame[static_cast<std::size_t>(mat)].mu;
     mu_max = std::max(mu_max, mu[k]);
-    c_p_max = std::max(c_p_max, p_wave_speed(m, spec.solid));
+    c_p_max = std::max(c_p_max, p_wave_speed(m, solid));
     eps_max[k] = m.fracture_strain ? *m.fracture_strain : std::numeric_limits<Real>::infinity();
     clamped[k] = p.clamped[i];
     if (!(lambda[k] + 2 * mu[k] > 0) || !(mu[k] > 0))
-      throw CaseError(fmt::format("{}: solid material '{}': expected mu > 0 and lambda + 2 mu > 0 (check vp > sqrt(2) vs)",
-                                  spec.file, m.name));
+      throw SetupError(fmt::format("{}: solid material '{}': expected mu > 0 and lambda + 2 mu > 0 (check vp > sqrt(2) vs)",
+                                  setup.origin, m.name));
   }
   breakable = std::any_of(eps_max.begin(), eps_max.end(), [](const Real e) { return std::isfinite(e); });
 
@@ -253,8 +248,8 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   for (std::size_t k = 0; k < ns; ++k) {
     const auto i = static_cast<std::size_t>(pid[k]);
     const std::string& body = p.bodies[p.body[i]].name;
-    for (const auto& b : spec.bodies)
-      if (b.name == body && !clamped[k]) omega[k] = b.angular_velocity;
+    for (const auto& b : setup.spins)
+      if (b.body == body && !clamped[k]) omega[k] = b.angular_velocity;
     (*f_omega)[i] = omega[k];
     (*f_theta)[i] = 0;
   }
@@ -285,7 +280,7 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
   n_max = 0;
   for (std::size_t i = 0; i < ns; ++i) {
     n_max = std::max(n_max, n0[i]);
-    const Real n0_used = norm == "particle" ? n0[i] : norm == "lattice" ? n0_lattice : 0.5 * (n0[i] + n0_lattice);
+    const Real n0_used = norm == SolidNormalisation::particle ? n0[i] : norm == SolidNormalisation::lattice ? n0_lattice : 0.5 * (n0[i] + n0_lattice);
     inv_n0[i] = n0_used > 0 ? 1 / n0_used : 0;
     n_now[i] = n0[i];
   }
@@ -304,14 +299,14 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
       b_k[b] = volume * 2 * dim * mu[i] * b_wr[b] * b_inv_r0[b] * (inv_n0[i] + inv_n0[j]);
     }
   }
-  set_volumetric_weights(spec.solid.volumetric_strain == "corrected");
+  set_volumetric_weights(solid.volumetric_strain == VolumetricStrain::corrected);
   b_intact.assign(b_j.size(), 1);
   b_ce.assign(b_j.size(), Vec::Zero());
 
   // Contact spring: contact_stiffness times the stiffness of a nearest-neighbour bond of the stiffest material.
-  k_contact = spec.solid.contact_stiffness * volume * 4 * dim * mu_max * weight(dp, re) / (dp * dp * n0_lattice);
+  k_contact = solid.contact_stiffness * volume * 4 * dim * mu_max * weight(dp, re) / (dp * dp * n0_lattice);
 
-  for (const auto& ls : spec.solid_loads) {
+  for (const auto& ls : setup.loads) {
     Load load{ls, {}};
     bool body_found = false;
     for (std::size_t k = 0; k < ns; ++k) {
@@ -321,23 +316,23 @@ SolidSolver::Impl::Impl(const CaseSpec& spec, ParticleSet& particles) : p(partic
       if (ls.region.contains(x0[k])) load.members.push_back(static_cast<LocalIndex>(k));
     }
     if (!body_found)
-      throw CaseError(fmt::format("{}: solid load '{}': body '{}' is not a solid body with particles", spec.file,
+      throw SetupError(fmt::format("{}: solid load '{}': body '{}' is not a solid body with particles", setup.origin,
                                   ls.name, ls.body));
     if (load.members.empty())
-      throw CaseError(fmt::format("{}: solid load '{}': no particle of body '{}' lies in its region", spec.file,
+      throw SetupError(fmt::format("{}: solid load '{}': no particle of body '{}' lies in its region", setup.origin,
                                   ls.name, ls.body));
     const Real norm = ls.direction.norm();
-    if (!(norm > 0)) throw CaseError(fmt::format("{}: solid load '{}': direction must be non-zero", spec.file, ls.name));
+    if (!(norm > 0)) throw SetupError(fmt::format("{}: solid load '{}': direction must be non-zero", setup.origin, ls.name));
     load.spec.direction /= norm;
     loads.push_back(std::move(load));
   }
   // Seismic sources: the force pattern over the body's particles around the source point.
-  for (const auto& ss : spec.sources) {
+  for (const auto& ss : setup.sources) {
     std::vector<std::size_t> candidates;
     for (std::size_t k = 0; k < ns; ++k)
       if (p.bodies[p.body[static_cast<std::size_t>(pid[k])]].name == ss.body) candidates.push_back(k);
     if (candidates.empty())
-      throw CaseError(fmt::format("{}: source '{}': body '{}' is not a solid body with particles", spec.file, ss.name,
+      throw SetupError(fmt::format("{}: source '{}': body '{}' is not a solid body with particles", setup.origin, ss.name,
                                   ss.body));
     const VectorStencil st = source_stencil(ss, x0, candidates);
     Source src{ss, {}, st.value};
@@ -643,7 +638,7 @@ void SolidSolver::Impl::compute_fragments() {
 
 // ---------------------------------------------------------------------------------------------
 
-SolidSolver::SolidSolver(const CaseSpec& spec, ParticleSet& particles) : impl_(std::make_unique<Impl>(spec, particles)) {
+SolidSolver::SolidSolver(const SolidSetup& setup, ParticleSet& particles) : impl_(std::make_unique<Impl>(setup, particles)) {
   impl_->compute_fragments();
 }
 SolidSolver::~SolidSolver() = default;

@@ -13,10 +13,12 @@
 // Optional Kelvin-Voigt bond damping (set_damping; off unless called, the coupled run loop calls it with
 // coupling.solid_damping): each bond adds k eta (e . (v_j - v_i)) e to its elastic force, with k the
 // bond's stiffness and e its direction, so the damping ratio of a mode is eta omega / 2.
+// Its parameters live in solid/solid_parameters.hpp (SolidSetup); it sees no case file.
 #pragma once
 
 #include "core/particles.hpp"
-#include "io/case.hpp"
+#include "core/setup_error.hpp"
+#include "solid/solid_parameters.hpp"
 
 #include <memory>
 #include <string>
@@ -52,16 +54,17 @@ struct LameConstants {
 /// The material law of the 2D model, the one place it is computed: from vp, vs when given (seed 000 §4),
 /// else eq. 4 (plane strain), reduced to plane stress with solid.plane_stress
 /// (lambda* = 2 lambda mu / (lambda + 2 mu)), with E / (1 - nu^2) in place of E for solid.wide_plate.
-LameConstants lame_constants(const SolidMaterial& m, const SolidNumerics& numerics);
+LameConstants lame_constants(const SolidMaterial& m, const SolidParameters& numerics);
 /// P-wave speed sqrt((lambda + 2 mu) / rho) of that law [m/s].
-Real p_wave_speed(const SolidMaterial& m, const SolidNumerics& numerics);
+Real p_wave_speed(const SolidMaterial& m, const SolidParameters& numerics);
 
 class SolidSolver {
  public:
   /// Builds the bonds (reference configuration) and registers the solid's fields on `particles`:
   /// rotation, angular_velocity, displacement, von_mises, solid_pressure, fragment, surface, solid_load.
-  /// Throws CaseError for inconsistent input (e.g. a load on an unknown body).
-  SolidSolver(const CaseSpec& spec, ParticleSet& particles);
+  /// io/ builds `setup` from a case (solid_setup). Throws SetupError (a std::invalid_argument) when the
+  /// setup does not fit the particles (e.g. a load on an unknown body, a load region without particles).
+  SolidSolver(const SolidSetup& setup, ParticleSet& particles);
   ~SolidSolver();
   SolidSolver(const SolidSolver&) = delete;
   SolidSolver& operator=(const SolidSolver&) = delete;

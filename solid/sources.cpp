@@ -48,7 +48,7 @@ VectorStencil source_stencil(const SourceSpec& source, const std::vector<Vec>& x
     for (const Real phi : s.weight) v.value.push_back(phi * source.direction);
     return v;
   } catch (const std::invalid_argument& e) {
-    throw CaseError(fmt::format("source '{}' at ({:g}, {:g}) on body '{}': {}", source.name, source.position[0],
+    throw SetupError(fmt::format("source '{}' at ({:g}, {:g}) on body '{}': {}", source.name, source.position[0],
                                 source.position[1], source.body, e.what()));
   }
 }

@@ -139,9 +139,9 @@ TEST(CaseFile, ValidCaseGivesTheExpectedValues) {
   EXPECT_DOUBLE_EQ(c.tank_motion.pivot[0], 0.3);
 
   EXPECT_EQ(c.coupling.subcycles, 0);  // auto
-  EXPECT_EQ(c.fluid.gradient, "corrected");
-  EXPECT_EQ(c.fluid.solver, "gmres");
-  EXPECT_EQ(c.fluid.preconditioner, "ilu");
+  EXPECT_EQ(c.fluid.gradient, PressureGradient::corrected);
+  EXPECT_EQ(c.fluid.solver, KrylovSolver::gmres);
+  EXPECT_EQ(c.fluid.preconditioner, Preconditioner::ilu);
   EXPECT_EQ(c.fluid.max_iterations, 300);
   EXPECT_DOUBLE_EQ(c.fluid.beta2, 0.85);  // default
   EXPECT_DOUBLE_EQ(c.solid.re, 2.1);
@@ -149,8 +149,8 @@ TEST(CaseFile, ValidCaseGivesTheExpectedValues) {
   EXPECT_TRUE(c.solid.plane_stress);
   EXPECT_DOUBLE_EQ(c.solid.dt_factor, 0.3);
   EXPECT_DOUBLE_EQ(c.solid.contact_stiffness, 0.5);
-  EXPECT_EQ(c.solid.normalisation, "lattice");
-  EXPECT_EQ(c.solid.volumetric_strain, "corrected");
+  EXPECT_EQ(c.solid.normalisation, SolidNormalisation::lattice);
+  EXPECT_EQ(c.solid.volumetric_strain, VolumetricStrain::corrected);
   ASSERT_EQ(c.solid_loads.size(), 1u);
   EXPECT_EQ(c.solid_loads[0].body, "plate");
   EXPECT_DOUBLE_EQ(c.solid_loads[0].region.lo[1], 0.1);
@@ -210,8 +210,8 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_EQ(c.coupling.subcycles, 1);
   EXPECT_DOUBLE_EQ(c.coupling.solid_damping, 0.5);
   EXPECT_DOUBLE_EQ(c.coupling.load_relaxation, 1.0);
-  EXPECT_EQ(c.fluid.solver, "cg");
-  EXPECT_EQ(c.fluid.preconditioner, "ssor");
+  EXPECT_EQ(c.fluid.solver, KrylovSolver::cg);
+  EXPECT_EQ(c.fluid.preconditioner, Preconditioner::ssor);
   EXPECT_EQ(c.fluid.preconditioner_rebuild_every, 1);
   EXPECT_DOUBLE_EQ(c.fluid.density_tolerance, 1e-6);
   EXPECT_DOUBLE_EQ(c.fluid.re_laplacian, 4.0);
@@ -219,9 +219,9 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_TRUE(c.output.fields.empty());
   EXPECT_TRUE(c.bodies[0].velocity.isZero());
   EXPECT_FALSE(c.solid.plane_stress);
-  EXPECT_EQ(c.solid.normalisation, "mean");
-  EXPECT_EQ(c.solid.volumetric_strain, "n0");
-  EXPECT_DOUBLE_EQ(c.solid.dt_factor, SolidNumerics{}.dt_factor);
+  EXPECT_EQ(c.solid.normalisation, SolidNormalisation::mean);
+  EXPECT_EQ(c.solid.volumetric_strain, VolumetricStrain::n0);
+  EXPECT_DOUBLE_EQ(c.solid.dt_factor, SolidParameters{}.dt_factor);
   EXPECT_TRUE(c.solid_loads.empty());
   EXPECT_TRUE(c.sources.empty());
   EXPECT_TRUE(c.receivers.points.empty());
@@ -629,7 +629,7 @@ TEST(CaseFileOverrides, ValuesListsIndexesNames) {
   EXPECT_DOUBLE_EQ(c.bodies[1].angular_velocity, 2.0);
   EXPECT_EQ(c.coupling.subcycles, 4);
   EXPECT_DOUBLE_EQ(c.fluid_materials[0].rho, 998);
-  EXPECT_EQ(c.fluid.solver, "cg");
+  EXPECT_EQ(c.fluid.solver, KrylovSolver::cg);
   EXPECT_FALSE(c.walls[0].open_top);
   EXPECT_DOUBLE_EQ(c.probes[0].position[0], 0.5);
   EXPECT_THAT(c.resolved_yaml, HasSubstr("end: 0.5"));
@@ -816,13 +816,13 @@ TEST(CaseFile, LateralWallFriction) {
   EXPECT_EQ(off.fluid.lateral_walls.gap, 0.0);
   const CaseSpec c = parse_case(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 0.039}"), file_name);
   EXPECT_DOUBLE_EQ(c.fluid.lateral_walls.gap, 0.039);
-  EXPECT_EQ(c.fluid.lateral_walls.model, "stokes");
+  EXPECT_EQ(c.fluid.lateral_walls.model, LateralWallModel::stokes);
   EXPECT_DOUBLE_EQ(c.fluid.lateral_walls.frequency, 1 / 1.2);  // the valid case rolls with period 1.2 s
   const CaseSpec f = parse_case(valid_with("  solver: gmres", "  solver: gmres\n  lateral_walls: {gap: 0.039, frequency: 2}"),
                                 file_name);
   EXPECT_DOUBLE_EQ(f.fluid.lateral_walls.frequency, 2.0);
   const CaseSpec h = parse_case(minimal_case + std::string("fluid: {lateral_walls: {gap: 0.01, model: poiseuille}}\n"), file_name);
-  EXPECT_EQ(h.fluid.lateral_walls.model, "poiseuille");
+  EXPECT_EQ(h.fluid.lateral_walls.model, LateralWallModel::poiseuille);
   EXPECT_THAT(error_of(minimal_case + std::string("fluid: {lateral_walls: {gap: 0.01}}\n")),
               HasSubstr("missing key 'frequency' in fluid.lateral_walls; expected: fluid.lateral_walls.frequency, a "
                         "positive number [Hz]"));

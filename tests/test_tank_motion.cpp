@@ -228,7 +228,7 @@ TEST(TankMotion, ClampedSolidFollowsTankAndTankFrameProbeReadsZero) {
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   std::vector<Vec> x0 = p.position;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   const ProbeWriter probes(spec, p, (fs::temp_directory_path() / "mpsfsi_tank_motion_probes.csv").string());
   const TankMotion tank = sine(4 * deg, 1.2, Vec(0.3, 0));
   const Real dt = solid.stable_dt();

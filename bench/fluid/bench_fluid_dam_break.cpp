@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/dam_break.yaml", overrides);
     Scene scene = build_scene(spec);
     ParticleSet& p = scene.particles;
-    FluidSolver fluid(spec, p, MPI_COMM_WORLD);
+    FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_WORLD);
     FluidStepReport sum;
     long iterations = 0;
     Real t = 0;

@@ -61,7 +61,11 @@ Variant parse_variant(const std::string& text, const CaseSpec& spec) {
   v.settings.solver = spec.fluid.solver;
   v.settings.tolerance = spec.fluid.tolerance;
   v.settings.max_iterations = spec.fluid.max_iterations;
-  v.settings.preconditioner = parts[1];
+  const auto preconditioner = value_of(preconditioner_names(), parts[1]);
+  if (!preconditioner)
+    throw std::invalid_argument("variant '" + text + "': unknown preconditioner '" + parts[1] + "' (expected one of: " +
+                                join_names(preconditioner_names()) + ")");
+  v.settings.preconditioner = *preconditioner;
   if (parts.size() > 2)
     for (const auto& kv : split(parts[2], ',')) {
       const auto eq = kv.find('=');
@@ -72,8 +76,13 @@ Variant parse_variant(const std::string& text, const CaseSpec& spec) {
       else if (key == "rebuild_growth") v.settings.rebuild_growth = std::stod(value);
       else if (key == "tolerance") v.settings.tolerance = std::stod(value);
       else if (key == "max_iterations") v.settings.max_iterations = std::stoi(value);
-      else if (key == "solver") v.settings.solver = value;
-      else {
+      else if (key == "solver") {
+        const auto solver = value_of(krylov_solver_names(), value);
+        if (!solver)
+          throw std::invalid_argument("variant '" + text + "': unknown solver '" + value + "' (expected one of: " +
+                                      join_names(krylov_solver_names()) + ")");
+        v.settings.solver = *solver;
+      } else {
         std::replace(key.begin(), key.end(), '_', ' ');
         v.settings.parameters[key] = value;
       }
@@ -100,7 +109,7 @@ int main(int argc, char** argv) {
     ParticleSet& p = scene.particles;
     // The physics runs on this rank alone (same trajectory for every rank count); only the variants'
     // solves are distributed.
-    FluidSolver fluid(spec, p, MPI_COMM_SELF);
+    FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
     std::vector<Real> p_prev, x0, x;
     LocalRows mine;
     Real t = 0;

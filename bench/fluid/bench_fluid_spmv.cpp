@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
     const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/dam_break.yaml",
                                     {"dp=" + dp, "fluid.preconditioner=jacobi"});
     Scene scene = build_scene(spec);
-    FluidSolver fluid(spec, scene.particles, MPI_COMM_SELF);
+    FluidSolver fluid(fluid_setup(spec), scene.particles, MPI_COMM_SELF);
     Real t = 0;
     for (int s = 0; s < n_steps; ++s) {
       const Real dt = fluid.stable_dt();

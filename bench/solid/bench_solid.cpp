@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
     std::mt19937 rng(1);
     std::uniform_real_distribution<Real> u(-0.01, 0.01);
     for (auto& v : p.velocity) v = Vec(u(rng), u(rng));
-    SolidSolver solid(spec, p);
+    SolidSolver solid(solid_setup(spec), p);
     const Real dt = solid.stable_dt();
     for (int k = 0; k < 5; ++k) solid.advance(k * dt, dt);  // warm-up
     const auto t0 = std::chrono::steady_clock::now();

@@ -73,7 +73,7 @@ TEST(FsiInterface, HydrostaticForceOnAPlate) {
     const CaseSpec spec = plate_case(true, left);
     Scene scene = build_scene(spec);
     ParticleSet& p = scene.particles;
-    SolidSolver solid(spec, p);  // publishes the surface flag (eq. 48)
+    SolidSolver solid(solid_setup(spec), p);  // publishes the surface flag (eq. 48)
     set_hydrostatic(p);
     FsiInterface fsi(spec, p);
     fsi.initialize();
@@ -102,7 +102,7 @@ TEST(FsiInterface, SeedNormalisationOverestimatesAFlatFace) {
   const CaseSpec spec = plate_case(true, true);
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   set_hydrostatic(p);
   FsiOptions opt;
   opt.normalisation = FsiOptions::Normalisation::seed;
@@ -118,7 +118,7 @@ TEST(FsiInterface, NoFluidNoForce) {
   const CaseSpec spec = plate_case(false, true);
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   auto& pressure = p.add_scalar_field("pressure");
   for (std::size_t i = 0; i < p.size(); ++i) pressure[i] = 1000;  // pressure alone does not load the plate
   FsiInterface fsi(spec, p);
@@ -132,7 +132,7 @@ TEST(FsiInterface, WorkOfTheLoadEqualsTheSolidsEnergyGain) {
   const CaseSpec spec = plate_case(true, true, 0.0);  // no gravity on the solid: only the load works
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   set_hydrostatic(p);
   FsiInterface fsi(spec, p);
   fsi.initialize();

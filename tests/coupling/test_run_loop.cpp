@@ -139,7 +139,7 @@ TEST(RunProjection, CountsStepsAndFlagsAbsurdRuns) {
 TEST(FluidSolver, OverflowingPressureSystemNamesDt) {
   CaseSpec spec = parse_case(water_case("{end: 1.0, dt: 1.0e-3}"), "block.yaml");
   Scene scene = build_scene(spec);
-  FluidSolver fluid(spec, scene.particles, MPI_COMM_SELF);
+  FluidSolver fluid(fluid_setup(spec), scene.particles, MPI_COMM_SELF);
   try {
     fluid.advance(0, 1e-300);
     FAIL() << "no error";

@@ -5,7 +5,7 @@
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
-#include "io/tank_motion_spec.hpp"
+#include "core/tank_motion.hpp"
 
 #include <gtest/gtest.h>
 
@@ -37,7 +37,7 @@ Vec velocity_after_step(const CaseSpec& spec, const Vec& v0, const Real t, const
   EXPECT_LT(i_fluid, p.size());
   EXPECT_EQ(p.n_of_kind(ParticleKind::fluid), 1u);
   p.velocity[i_fluid] = v0;
-  FluidSolver fluid(spec, p, MPI_COMM_SELF);
+  FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
   fluid.advance(t, dt);
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.kind[i] == ParticleKind::fluid) return p.velocity[i];
@@ -52,9 +52,9 @@ TEST(LateralWallFriction, Rates) {
   w.gap = 0.039;
   w.frequency = 0.8;
   EXPECT_DOUBLE_EQ(lateral_wall_friction_rate(w, 5e-5), std::sqrt(2 * 5e-5 * two_pi * 0.8) / 0.039);
-  w.model = "poiseuille";
+  w.model = LateralWallModel::poiseuille;
   EXPECT_DOUBLE_EQ(lateral_wall_friction_rate(w, 5e-5), 12 * 5e-5 / (0.039 * 0.039));
-  w.model = "turbulent";
+  w.model = static_cast<LateralWallModel>(99);  // no such model
   EXPECT_THROW(lateral_wall_friction_rate(w, 5e-5), std::invalid_argument);
 }
 

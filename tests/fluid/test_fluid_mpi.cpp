@@ -27,8 +27,8 @@ int main(int argc, char** argv) {
                                      "fluid.density_tolerance=0"});
     Scene serial_scene = build_scene(spec);
     Scene dist_scene = build_scene(spec);
-    FluidSolver serial(spec, serial_scene.particles, MPI_COMM_SELF);
-    FluidSolver dist(spec, dist_scene.particles, MPI_COMM_WORLD);
+    FluidSolver serial(fluid_setup(spec), serial_scene.particles, MPI_COMM_SELF);
+    FluidSolver dist(fluid_setup(spec), dist_scene.particles, MPI_COMM_WORLD);
     Real t = 0;
     for (int step = 0; step < 5; ++step) {
       const Real dt = serial.stable_dt();

@@ -25,7 +25,7 @@ CaseSpec still_water_case() {
 struct OneStep {
   CaseSpec spec = still_water_case();
   Scene scene = build_scene(spec);
-  FluidSolver fluid{spec, scene.particles, MPI_COMM_SELF};
+  FluidSolver fluid{fluid_setup(spec), scene.particles, MPI_COMM_SELF};
   Real dt = 0;
   FluidStepReport report;
   OneStep() {
@@ -132,8 +132,8 @@ class PressureSolve : public ::testing::TestWithParam<std::pair<const char*, con
   /// The parameter's solver and preconditioner with this relative tolerance and 2000 iterations at most.
   PressureSolverSettings settings_with(const Real tolerance) const {
     PressureSolverSettings settings;
-    settings.solver = GetParam().first;
-    settings.preconditioner = GetParam().second;
+    settings.solver = *value_of(krylov_solver_names(), GetParam().first);
+    settings.preconditioner = *value_of(preconditioner_names(), GetParam().second);
     settings.tolerance = tolerance;
     settings.max_iterations = 2000;
     return settings;
@@ -226,6 +226,6 @@ INSTANTIATE_TEST_SUITE_P(AllChoices, PressureSolve,
 
 TEST(PressureSolve, RejectsUnknownChoices) {
   PressureSolverSettings settings;
-  settings.preconditioner = "amg";
+  settings.preconditioner = static_cast<Preconditioner>(99);  // no such preconditioner
   EXPECT_THROW(make_pressure_solver(settings, MPI_COMM_WORLD), std::invalid_argument);
 }

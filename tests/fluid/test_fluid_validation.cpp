@@ -25,7 +25,7 @@ const std::string source_dir = MPSFSI_SOURCE_DIR;
 
 /// Step the fluid to `end`, calling `sample(t)` after every step.
 void run(const CaseSpec& spec, ParticleSet& p, const Real end, const std::function<void(Real)>& sample) {
-  FluidSolver fluid(spec, p, MPI_COMM_SELF);
+  FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
   Real t = 0;
   int max_it = 0;
   while (t < end - 1e-12) {

@@ -32,7 +32,7 @@ TEST(Solid, FreeBodyConservesMomentumAngularMomentumAndEnergy) {
   b.angular_velocity = 20.0;  // centrifugal stretch: strain energy of a few % of the total
   spec.bodies.push_back(b);
   Scene scene = build_scene(spec);
-  SolidSolver solid(spec, scene.particles);
+  SolidSolver solid(solid_setup(spec), scene.particles);
   const Real dt = solid.stable_dt();
   const SolidDiagnostics d0 = solid.diagnostics();
   EXPECT_GT(d0.rotational, 0);
@@ -91,7 +91,7 @@ TEST(Solid, CompressionalPulseTravelsAtPWaveSpeed) {
   spec.solid_loads.push_back(pulse);
   Scene scene = build_scene(spec);
   auto& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   // Station particles on the centre line.
   const Real x1 = 100.5 * dp, x2 = 200.5 * dp, yc = (ny / 2 + 0.5) * dp;
   std::size_t i1 = 0, i2 = 0;
@@ -144,7 +144,7 @@ TEST(Solid, ClampedParticlesStayPut) {
   spec.bodies.push_back(b);
   Scene scene = build_scene(spec);
   const auto x0 = scene.particles.position;
-  SolidSolver solid(spec, scene.particles);
+  SolidSolver solid(solid_setup(spec), scene.particles);
   const Real dt = solid.stable_dt();
   for (int k = 0; k < 2000; ++k) solid.advance(k * dt, dt);
   Real tip = 0;
@@ -168,7 +168,7 @@ TEST(Solid, BarPulledApartBreaksIntoTwoFragments) {
   Scene scene = build_scene(spec);
   auto& p = scene.particles;
   for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] = Vec(p.position[i][0] < 0.1 ? -5.0 : 5.0, 0);
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   const auto dir = std::filesystem::temp_directory_path() / "mpsfsi_test_solid_fracture";
   std::filesystem::create_directories(dir);
   solid.set_output_directory(dir.string());
@@ -205,7 +205,7 @@ TEST(Solid, BodiesInContactRepelAndNeverInterpenetrate) {
   spec.bodies.push_back(a);
   spec.bodies.push_back(solid_body("block", "hard", Vec(-0.5, 0), Vec(1.0, 0.25)));
   Scene scene = build_scene(spec);
-  SolidSolver solid(spec, scene.particles);
+  SolidSolver solid(solid_setup(spec), scene.particles);
   solid.prepare_output(0);
   EXPECT_EQ(solid.n_fragments(), 2u);
   const SolidDiagnostics d0 = solid.diagnostics();
@@ -242,7 +242,7 @@ TEST(Solid, FollowsAReorderingOfTheParticleSet) {
   b.angular_velocity = 2.0;
   spec.bodies.push_back(b);
   Scene a = build_scene(spec), c = build_scene(spec);
-  SolidSolver sa(spec, a.particles), sc(spec, c.particles);
+  SolidSolver sa(solid_setup(spec), a.particles), sc(solid_setup(spec), c.particles);
   const Real dt = sa.stable_dt();
   for (int k = 0; k < 100; ++k) sa.advance(k * dt, dt), sc.advance(k * dt, dt);
   std::vector<LocalIndex> order(c.particles.size());
@@ -276,7 +276,7 @@ PlateRun swing_plate(const Real beta, const bool noise) {
   spec.bodies.push_back(b);
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   solid.set_damping(beta);
   std::size_t tip = 0;
   for (std::size_t i = 0; i < p.size(); ++i)
@@ -292,7 +292,7 @@ PlateRun swing_plate(const Real beta, const bool noise) {
         p.velocity[i][d] = 0.1 * (static_cast<Real>((state >> 8) & 0xffff) / 65535.0 - 0.5) * 2;
       }
     }
-    SolidSolver fresh(spec, p);  // picks up the velocities
+    SolidSolver fresh(solid_setup(spec), p);  // picks up the velocities
     fresh.set_damping(beta);
     run.noise_ke_start = fresh.diagnostics().kinetic;
     const Real dt = fresh.stable_dt();
@@ -354,7 +354,7 @@ TEST(Solid, WidePlateScalesTheModulusByOneOverOneMinusNuSquared) {
     spec.solid.wide_plate = wide;
     Scene scene = build_scene(spec);
     ParticleSet& p = scene.particles;
-    SolidSolver solid(spec, p);
+    SolidSolver solid(solid_setup(spec), p);
     dt_stable = solid.stable_dt();
     for (std::size_t i = 0; i < p.size(); ++i)  // a bend and a stretch: u = (0.01 x, 0.5 x^2)
       p.position[i] += Vec(0.01 * p.position[i][0], 0.5 * p.position[i][0] * p.position[i][0]);

@@ -23,7 +23,7 @@ TEST(SolidCases, CollisionFractureBreaksAndFragmentsNeverOverlap) {
   const CaseSpec spec = load_case(case_path("collision_fracture"));
   Scene scene = build_scene(spec);
   auto& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   const Real dt = solid.stable_dt();
   Real t = 0, d_min = 1e9, t_fracture = -1;
   std::size_t max_fragments = 0;
@@ -74,7 +74,7 @@ SpallResult run_hopkinson(const std::string& name) {
   const CaseSpec spec = load_case(case_path(name));
   Scene scene = build_scene(spec);
   auto& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   const Real dt = *spec.solid.dt;
   SpallResult r;
   const int n_steps = static_cast<int>(std::lround(spec.time.end / dt));

@@ -2,7 +2,7 @@
 // functions match scripts/lamb/lamb2d.py (values, peaks, spectrum peak at f0, tables); an explosive
 // line source gives no net force or torque and the moment tensor M(t) I, inside the body and just
 // below the free surface; a point force gives the force F(t) with no moment about the source point;
-// a source with too few particles in range is a CaseError naming it.
+// a source with too few particles in range is a SetupError (std::invalid_argument) naming it.
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
 #include "support/spec_builders.hpp"
@@ -104,7 +104,7 @@ Impulse one_step(const SourceSpec& s, const Real t, const Real dt) {
   SourceCase c(s);
   Scene scene = build_scene(c.spec);
   const std::vector<Vec> x0 = scene.particles.position;
-  SolidSolver solid(c.spec, scene.particles);
+  SolidSolver solid(solid_setup(c.spec), scene.particles);
   solid.advance(t, dt);
   const Real mass = 2200 * 0.1 * 0.1;
   Impulse r;
@@ -145,7 +145,7 @@ TEST(Sources, ExplosionKeepsTheMomentumZeroOverManySteps) {
   const SourceSpec s = source(SourceType::explosion, Vec(0.0, -0.6));
   SourceCase c(s);
   Scene scene = build_scene(c.spec);
-  SolidSolver solid(c.spec, scene.particles);
+  SolidSolver solid(solid_setup(c.spec), scene.particles);
   const Real dt = 1e-5;
   for (int k = 0; k < 600; ++k) solid.advance(k * dt, dt);
   const SolidDiagnostics d = solid.diagnostics();
@@ -161,9 +161,9 @@ TEST(Sources, TooFewParticlesInRangeNamesTheSource) {
   SourceCase c(s);
   Scene scene = build_scene(c.spec);
   try {
-    SolidSolver solid(c.spec, scene.particles);
+    SolidSolver solid(solid_setup(c.spec), scene.particles);
     FAIL() << "no error";
-  } catch (const CaseError& e) {
+  } catch (const std::invalid_argument& e) {  // SetupError
     EXPECT_NE(std::string(e.what()).find("source 's' at (0, -0.75) on body 'ground'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("use a larger radius"), std::string::npos) << e.what();
   }

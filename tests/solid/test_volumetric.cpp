@@ -23,8 +23,8 @@ CaseSpec block(const std::string& volumetric, const std::string& normalisation, 
   spec.solid_materials.push_back(test::wave_material("rock", 2200, vp, vs));
   spec.bodies.push_back(test::solid_body("ground", "rock", Vec(-2, -1.5), Vec(2, 0)));
   spec.solid.re = 1.9;
-  spec.solid.volumetric_strain = volumetric;
-  spec.solid.normalisation = normalisation;
+  spec.solid.volumetric_strain = *value_of(volumetric_strain_names(), volumetric);
+  spec.solid.normalisation = *value_of(solid_normalisation_names(), normalisation);
   return spec;
 }
 
@@ -38,7 +38,7 @@ Real surface_residual(const std::string& volumetric, const std::string& normalis
   CaseSpec spec = block(volumetric, normalisation, vp, vs);
   Scene scene = build_scene(spec);
   auto& p = scene.particles;
-  SolidSolver solid(spec, p);
+  SolidSolver solid(solid_setup(spec), p);
   for (auto& x : p.position) x = Vec(x[0] * (1 + e0), x[1] * (1 + eyy));
   const std::vector<Vec> x_before = p.position;
   const Real dt = 1e-7;
@@ -72,7 +72,7 @@ TEST(VolumetricStrain, CorrectedKeepsMomentumAndEnergyOfASpinningBody) {
   spec.bodies[0].velocity = Vec(3, -1);
   spec.bodies[0].angular_velocity = 300;
   Scene scene = build_scene(spec);
-  SolidSolver solid(spec, scene.particles);
+  SolidSolver solid(solid_setup(spec), scene.particles);
   const SolidDiagnostics d0 = solid.diagnostics();
   const Real dt = 1e-5;
   Real e_min = d0.total(), e_max = d0.total();

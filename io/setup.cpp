@@ -1,0 +1,33 @@
+// The builders of the solvers' setups from a case (io/case.hpp fluid_setup, solid_setup): the fluid
+// and the solid see their parameters (fluid/fluid_parameters.hpp, solid/solid_parameters.hpp), not the case.
+#include "io/case.hpp"
+
+namespace mpsfsi {
+
+FluidSetup fluid_setup(const CaseSpec& spec) {
+  FluidSetup s;
+  s.dp = spec.dp;
+  s.gravity = spec.gravity;
+  s.domain = spec.domain;
+  s.time = spec.time;
+  s.materials = spec.fluid_materials;
+  s.parameters = spec.fluid;
+  s.tank_motion = spec.tank_motion;
+  return s;
+}
+
+SolidSetup solid_setup(const CaseSpec& spec) {
+  SolidSetup s;
+  s.origin = spec.file;
+  s.dp = spec.dp;
+  s.gravity = spec.gravity;
+  s.materials = spec.solid_materials;
+  s.parameters = spec.solid;
+  s.tank_motion = spec.tank_motion;
+  for (const auto& b : spec.bodies) s.spins.push_back({b.name, b.angular_velocity});
+  s.loads = spec.solid_loads;
+  s.sources = spec.sources;
+  return s;
+}
+
+}  // namespace mpsfsi
