@@ -32,6 +32,7 @@
 #include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
+#include "core/operators.hpp"
 #include "solid/sources.hpp"
 
 #include <Eigen/Dense>
@@ -261,20 +262,18 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles) : p(par
   b_off.assign(ns + 1, 0);
   for (std::size_t i = 0; i < ns; ++i) {
     b_off[i] = b_j.size();
-    for (std::size_t q = nl.begin(i); q < nl.end(i); ++q) {
-      const auto j = static_cast<std::size_t>(nl.index[q]);
-      if (p.body[static_cast<std::size_t>(pid[i])] != p.body[static_cast<std::size_t>(pid[j])]) continue;
-      const Vec r0 = x0[j] - x0[i];
-      const Real w0 = weight(r0.norm(), re);
-      if (w0 <= 0) continue;
+    const auto body_i = p.body[static_cast<std::size_t>(pid[i])];
+    const auto same_body = [&](const std::size_t j) { return p.body[static_cast<std::size_t>(pid[j])] == body_i; };
+    // The pair loop of the operator layer: n0_i is eq. 8's number density over the bonds.
+    for_each_pair(x0, nl, re, i, same_body, [&](const std::size_t j, const Vec& r0, Real, const Real w0) {
       n0[i] += w0;
-      if (j < i) continue;
+      if (j < i) return;
       b_j.push_back(static_cast<LocalIndex>(j));
       b_r0.push_back(r0);
       b_inv_r0.push_back(1 / r0.norm());
       b_wr.push_back(w0 / r0.norm());
       b_w0.push_back(w0);
-    }
+    });
   }
   b_off[ns] = b_j.size();
   n_max = 0;
