@@ -80,15 +80,15 @@ __attribute__((noinline)) void sort_short_list(LocalIndex* a, const std::size_t 
     *q = v;
   }
 }
-}  // namespace
 
-void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
-                          const bool sorted_lists) {
-  constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^d cells
-  const std::size_t n = x.size();
-  grid.build(x, radius / reach);
+/// The rows of a neighbour list: row q holds the neighbours of point particle_of(q) among all points x,
+/// found in the (2 reach + 1)^d cells around it of `grid` (built over x with cells of side radius / reach).
+template <class ParticleOf>
+void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& particle_of, const Real radius,
+               const int reach, NeighbourList& out, const CellGrid& grid, const bool sorted_lists) {
   const Real r2 = radius * radius;
   out.radius = radius;
+  out.support_only = false;
   out.offset.resize(n + 1);
   // Keep last step's capacity; the list length changes little from step to step.
   out.index.resize(out.index.capacity());
@@ -99,7 +99,8 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
   CellGrid::Cell n_cells;
   for (int a = 0; a < dim; ++a) n_cells[a] = grid.n_cells(a);
   std::size_t n_pairs = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::size_t i = particle_of(q);
     const Vec xi = x[i];
     const CellGrid::Cell c = grid.cell_of_point(i);
     // Stencil bounds per axis, clipped to the grid.
@@ -134,10 +135,27 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
       }
       if (a == dim) break;
     }
-    out.offset[i + 1] = n_pairs;
-    if (sorted_lists) sort_short_list(out.index.data() + out.offset[i], n_pairs - out.offset[i]);
+    out.offset[q + 1] = n_pairs;
+    if (sorted_lists) sort_short_list(out.index.data() + out.offset[q], n_pairs - out.offset[q]);
   }
   out.index.resize(n_pairs);
+}
+
+}  // namespace
+
+void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
+                          const bool sorted_lists) {
+  constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^d cells
+  grid.build(x, radius / reach);
+  fill_rows(x, x.size(), [](const std::size_t q) { return q; }, radius, reach, out, grid, sorted_lists);
+}
+
+void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, const Real radius,
+                             NeighbourList& out, CellGrid& grid) {
+  constexpr int reach = 1;  // few rows: cells of side radius, a 3^d stencil, no finer grid to build
+  grid.build(x, radius);
+  fill_rows(x, rows.size(), [&](const std::size_t q) { return static_cast<std::size_t>(rows[q]); }, radius, reach, out,
+            grid, false);
 }
 
 void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out) {

@@ -50,10 +50,6 @@ class CellGrid {
     for (int a = dim - 2; a >= 0; --a) k = k * static_cast<std::size_t>(n_cells_[a]) + static_cast<std::size_t>(c[a]);
     return k;
   }
-#if MPSFSI_DIM == 2
-  /// 2D: linear cell index of (cx, cy) = cy n_x + cx.
-  std::size_t cell_index(const int cx, const int cy) const { return cell_index(Cell(cx, cy)); }
-#endif
   /// Points in cell c: sorted()[cell_start(c) .. cell_start(c + 1)).
   std::size_t cell_start(const std::size_t c) const { return cell_start_[c]; }
   const std::vector<LocalIndex>& sorted() const { return sorted_; }
@@ -88,6 +84,10 @@ class CellGrid {
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid,
                           bool sorted = true);
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out);
+/// The neighbours of a few points only: row q of `out` lists every j != rows[q] with |x_j - x_rows[q]| <
+/// radius, in cell order (e.g. the solid surface particles whose fluid load is summed). Cells of side radius.
+void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, Real radius,
+                             NeighbourList& out, CellGrid& grid);
 
 /// A particle order that follows the cells (axis 0 fastest: row by row), for memory locality:
 /// reorder particles with ParticleSet::reorder(cell_order(x, radius / 2)). With the same cell side

@@ -28,15 +28,16 @@ struct AllNeighbours {
   constexpr bool operator()(std::size_t) const { return true; }
 };
 
-/// The pair loop every operator is built on: f(j, r_ij, |r_ij|^2, w_ij) for every neighbour j of i in `nl`
-/// inside the support re (w of eq. 7) that `accept(j)`.
+/// The pair loop every operator is built on: f(j, r_ij, |r_ij|^2, w_ij) for every neighbour j of particle i
+/// listed in row `row` of `nl` inside the support re (w of eq. 7) that `accept(j)`. A list of all particles
+/// has row i for particle i (for_each_pair); one of a few particles (build_neighbour_list_of) has its own rows.
 template <class Accept, class F>
-inline void for_each_pair(const std::vector<Vec>& x, const NeighbourList& nl, const Real re, const std::size_t i,
-                          Accept&& accept, F&& f) {
+inline void for_each_pair_in_row(const std::vector<Vec>& x, const NeighbourList& nl, const Real re,
+                                 const std::size_t row, const std::size_t i, Accept&& accept, F&& f) {
   assert(re <= nl.radius * (1 + 1e-12));
   const bool test_support = !(nl.support_only && re == nl.radius);
   const Vec xi = x[i];
-  for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
+  for (std::size_t k = nl.begin(row); k < nl.end(row); ++k) {
     const auto j = static_cast<std::size_t>(nl.index[k]);
     if (!accept(j)) continue;
     const Vec rij = x[j] - xi;
@@ -44,6 +45,12 @@ inline void for_each_pair(const std::vector<Vec>& x, const NeighbourList& nl, co
     if (test_support && !in_support(r2, re)) continue;
     f(j, rij, r2, re / std::sqrt(r2) - 1.0);
   }
+}
+
+template <class Accept, class F>
+inline void for_each_pair(const std::vector<Vec>& x, const NeighbourList& nl, const Real re, const std::size_t i,
+                          Accept&& accept, F&& f) {
+  for_each_pair_in_row(x, nl, re, i, i, accept, f);
 }
 
 /// n_i = sum_j w(|r_ij|) (eq. 8), and N_i, the number of neighbours with w > 0 (free surface, seed 004 §4.3).

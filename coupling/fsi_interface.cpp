@@ -130,39 +130,31 @@ void FsiInterface::compute_load() {
     b.force.setZero();
     b.n_wetted = 0;
   }
-  grid_.build(p_.position, re_);
-  const int nx = grid_.n_cells(0), ny = grid_.n_cells(1);
-  const auto& sorted = grid_.sorted();
-  const auto& xs = grid_.sorted_positions();
+  // The loaded particles (solid surface, eq. 48) and their neighbours among all particles.
+  rows_.clear();
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (p_.kind[i] == ParticleKind::solid && flag[i] != 0 && !(opt_.exclude_clamped && p_.clamped[i]))
+      rows_.push_back(static_cast<LocalIndex>(i));
+  build_neighbour_list_of(p_.position, rows_, re_, rows_nl_, grid_);
   const Real volume = std::pow(dp_, dim);
-  for (std::size_t i = 0; i < p_.size(); ++i) {
-    if (p_.kind[i] != ParticleKind::solid || flag[i] == 0) continue;
-    if (opt_.exclude_clamped && p_.clamped[i]) continue;
+  for (std::size_t q = 0; q < rows_.size(); ++q) {
+    const auto i = static_cast<std::size_t>(rows_[q]);
     const auto it = n0_solid_.find(p_.global_id[i]);
     if (it == n0_solid_.end()) throw std::logic_error("FsiInterface: a solid particle appeared after initialize()");
-    const Vec xi = p_.position[i];
     const Real pi = pressure[i];
     Real n_total = 0;
     Vec sum = Vec::Zero();
     bool wet = false;
-    const auto c = grid_.cell_of_point(i);
-    for (int cy = std::max(c[1] - 1, 0); cy <= std::min(c[1] + 1, ny - 1); ++cy) {
-      const std::size_t first = grid_.cell_start(grid_.cell_index(std::max(c[0] - 1, 0), cy));
-      const std::size_t last = grid_.cell_start(grid_.cell_index(std::min(c[0] + 1, nx - 1), cy) + 1);
-      for (std::size_t q = first; q < last; ++q) {
-        const Vec rij = xs[q] - xi;
-        const Real r2 = rij.squaredNorm();
-        if (!in_support(r2, re_)) continue;
-        const auto j = static_cast<std::size_t>(sorted[q]);
-        const Real w = re_ / std::sqrt(r2) - 1.0;
-        n_total += w;
-        const bool fluid = p_.kind[j] == ParticleKind::fluid;
-        if (!fluid && !(p_.kind[j] == ParticleKind::solid && flag[j] != 0 && !(opt_.exclude_clamped && p_.clamped[j])))
-          continue;  // j*: fluid, solid surface (not clamped)
-        wet = wet || fluid;
-        sum += (0.5 * (pi + pressure[j]) * w / r2) * rij;
-      }
-    }
+    for_each_pair_in_row(p_.position, rows_nl_, re_, q, i, AllNeighbours{},
+                         [&](const std::size_t j, const Vec& rij, const Real r2, const Real w) {
+                           n_total += w;  // eq. 8 over every neighbour
+                           const bool fluid = p_.kind[j] == ParticleKind::fluid;
+                           if (!fluid && !(p_.kind[j] == ParticleKind::solid && flag[j] != 0 &&
+                                           !(opt_.exclude_clamped && p_.clamped[j])))
+                             return;  // j*: fluid, solid surface (not clamped)
+                           wet = wet || fluid;
+                           sum += (0.5 * (pi + pressure[j]) * w / r2) * rij;
+                         });
     const Real n_tilde = n_total - it->second;  // eq. 51
     if (!wet || !(n_tilde > 0)) continue;
     const Real n_norm = opt_.normalisation == FsiOptions::Normalisation::seed ? n_tilde : n0_;

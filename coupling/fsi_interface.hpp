@@ -147,6 +147,8 @@ class FsiInterface {
   NeighbourList solid_nl_;
   CellGrid solid_grid_;
   CellGrid grid_;
+  std::vector<LocalIndex> rows_;  ///< compute_load: the loaded solid surface particles
+  NeighbourList rows_nl_;         ///< compute_load: their neighbours among all particles
   std::ofstream csv_;
   std::string csv_path_;
 };

@@ -49,6 +49,29 @@ TEST(Neighbours, RandomPointsMatchBruteForce) {
   for (const Real radius : {0.01, 0.05, 0.13, 0.5}) expect_same_as_brute_force(x, radius);
 }
 
+// The neighbours of a few points (build_neighbour_list_of): row q holds those of point rows[q], as brute force.
+TEST(Neighbours, ListOfSelectedPointsMatchesBruteForce) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<Real> u(0, 1);
+  std::vector<Vec> x(1500);
+  for (auto& p : x)
+    for (int a = 0; a < dim; ++a) p[a] = u(rng);
+  const std::vector<LocalIndex> rows = {0, 17, 17, 400, 1499, 3};
+  for (const Real radius : {0.02, 0.1, 0.3}) {
+    NeighbourList nl;
+    CellGrid grid;
+    build_neighbour_list_of(x, rows, radius, nl, grid);
+    const auto ref = brute_force(x, radius);
+    ASSERT_EQ(nl.n_particles(), rows.size());
+    for (std::size_t q = 0; q < rows.size(); ++q) {
+      std::vector<LocalIndex> got(nl.index.begin() + static_cast<long>(nl.begin(q)),
+                                  nl.index.begin() + static_cast<long>(nl.end(q)));
+      std::sort(got.begin(), got.end());
+      EXPECT_EQ(got, ref[static_cast<std::size_t>(rows[q])]) << "row " << q << ", radius " << radius;
+    }
+  }
+}
+
 TEST(Neighbours, LatticeMatchesBruteForce) {
   const Real dp = 0.01;
 #if MPSFSI_DIM == 2
