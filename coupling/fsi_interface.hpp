@@ -51,9 +51,9 @@ class BinaryReader;
 struct FsiOptions {
   enum class Normalisation { lattice, seed };
   Normalisation normalisation = Normalisation::lattice;
-  std::string flag_field = "surface";       ///< solid surface flag (eq. 48), kept current by the solid
-  std::string load_field = "solid_load";    ///< external force per particle read by the solid [N/m]
-  std::string pressure_field = "pressure";  ///< the fluid's pressure (fluid and boundary particles) [Pa]
+  std::string flag_field = solid_fields::surface;  ///< solid surface flag (eq. 48), kept current by the solid
+  std::string load_field = solid_fields::load;     ///< external force per particle read by the solid [N/m]
+  std::string pressure_field = fluid_fields::pressure;  ///< the fluid's pressure (fluid and boundary particles) [Pa]
   /// The fluid's PPE sees the solid at its initial number density: (a) writes (n_i^0)_solid - (n_i)_solid
   /// into offset_field, which the fluid adds to n* of its boundary particles.
   bool freeze_solid_density = true;
@@ -61,6 +61,7 @@ struct FsiOptions {
   /// solid's mean velocity over the previous step (its displacement / dt, free of the sub-steps'
   /// oscillations). restore_solid() puts the solid's own state back after the fluid step.
   bool midstep_predictor = true;
+  /// Declared by the coupling (it writes the field), read by the fluid through FluidOptions.
   std::string offset_field = "fsi_density_offset";
   /// Clamped solid particles (e.g. the foot of a plate embedded in the floor) are wall-like: they get no
   /// load and are left out of the j* of eq. 50 (their PPE pressure is spurious where their lattice and the

@@ -16,6 +16,13 @@ namespace mpsfsi {
 
 static_assert(dim == 2, "mpsfsi: fluid/ is 2D only; MPSFSI_DIM=3 builds core/ alone");
 
+/// The particle fields the fluid writes that others read (the coupling, the probes, the output): declared
+/// here once, used by name everywhere.
+namespace fluid_fields {
+inline constexpr const char* pressure = "pressure";          ///< [Pa], fluid and boundary particles
+inline constexpr const char* free_surface = "free_surface";  ///< 1 on free-surface rows (p = 0)
+}  // namespace fluid_fields
+
 struct FluidMaterial {
   std::string name;
   Real rho = 1000;    ///< density [kg/m3]

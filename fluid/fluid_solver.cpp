@@ -90,8 +90,8 @@ struct FluidSolver::Impl {
     density_tolerance = fluid.density_tolerance;
     preconditioner = std::string(to_string(ps.preconditioner));
 
-    p.add_scalar_field("pressure", 0.0);
-    p.add_scalar_field("free_surface", 0.0);
+    p.add_scalar_field(fluid_fields::pressure, 0.0);
+    p.add_scalar_field(fluid_fields::free_surface, 0.0);
     if (motion.moving())
       for (std::size_t i = 0; i < p.size(); ++i)
         if (p.kind[i] == ParticleKind::wall || p.kind[i] == ParticleKind::dummy) wall_reference[p.global_id[i]] = p.position[i];
@@ -213,7 +213,7 @@ struct FluidSolver::Impl {
   void density_and_surface() {
     const std::size_t n = p.size();
     n_star.resize(n);
-    auto& surface = p.scalar_field("free_surface");
+    auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::vector<Real>* offset = nullptr;
     if (!opt.density_offset_field.empty() && p.has_scalar_field(opt.density_offset_field))
       offset = &p.scalar_field(opt.density_offset_field);
@@ -231,7 +231,7 @@ struct FluidSolver::Impl {
   /// p = 0 rows (free surface) as identity rows dropped from the other rows' columns (keeps symmetry).
   void assemble(const Real dt) {
     const std::size_t n = p.size();
-    const auto& surface = p.scalar_field("free_surface");
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
     row_of.resize(n);
     particle_of_row.clear();
     for (std::size_t i = 0; i < n; ++i) {
@@ -298,8 +298,8 @@ struct FluidSolver::Impl {
 
   /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient.
   PressureSolveResult solve_pressure() {
-    auto& pressure = p.scalar_field("pressure");
-    const auto& surface = p.scalar_field("free_surface");
+    auto& pressure = p.scalar_field(fluid_fields::pressure);
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n_rows = particle_of_row.size();
     x_all.resize(n_rows);
     for (std::size_t r = 0; r < n_rows; ++r) {
@@ -318,8 +318,8 @@ struct FluidSolver::Impl {
   /// Eq. 19 and 24: v += -dt/rho grad P, r += dt (-dt/rho grad P). grad P by eq. 9 with p_min (every pair
   /// repels), or by the corrected gradient eq. 14-15 (falls back to p_min where the matrix is singular).
   void correct(const Real dt) {
-    const auto& pressure = p.scalar_field("pressure");
-    const auto& surface = p.scalar_field("free_surface");
+    const auto& pressure = p.scalar_field(fluid_fields::pressure);
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n = p.size();
     const Real c_grad = dim / lat_g.n0;
     dv.resize(n);
@@ -505,7 +505,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
 
   t0 = Clock::now();
   m.correct(dt);
-  const auto& surface = m.p.scalar_field("free_surface");
+  const auto& surface = m.p.scalar_field(fluid_fields::free_surface);
   for (std::size_t i = 0; i < m.p.size(); ++i) report.n_surface += surface[i] != 0;
   report.n_removed = m.remove_escaped();
   for (std::size_t i = 0; i < m.p.size(); ++i)

@@ -4,6 +4,7 @@
 #include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "core/tank_motion.hpp"
+#include "fluid/fluid_parameters.hpp"
 
 #include <fmt/format.h>
 
@@ -60,7 +61,7 @@ ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, con
 
 std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t) const {
   std::vector<Real> values;
-  const bool has_pressure = p.has_scalar_field("pressure");
+  const bool has_pressure = p.has_scalar_field(fluid_fields::pressure);
   for (const auto& probe : probes_) {
     switch (probe.spec.type) {
       case ProbeType::pressure: {
@@ -71,7 +72,7 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t) cons
           if (p.kind[i] != ParticleKind::fluid && p.kind[i] != ParticleKind::wall) continue;
           const Real w = weight((p.position[i] - probe.spec.position).norm(), re);
           sw += w;
-          swp += w * p.scalar_field("pressure")[i];
+          swp += w * p.scalar_field(fluid_fields::pressure)[i];
         }
         values.push_back(sw > 0 ? swp / sw : 0.0);
         break;

@@ -16,6 +16,12 @@ namespace mpsfsi {
 
 static_assert(dim == 2, "mpsfsi: solid/ is 2D only; MPSFSI_DIM=3 builds core/ alone");
 
+/// The particle fields of the solid that the coupling reads or writes: declared here once.
+namespace solid_fields {
+inline constexpr const char* surface = "surface";    ///< 1 on surface particles (eq. 48), kept current by the solid
+inline constexpr const char* load = "solid_load";    ///< external force per particle read by the solid [N/m]
+}  // namespace solid_fields
+
 struct SolidMaterial {
   std::string name;
   Real rho = 1000;    ///< density [kg/m3]

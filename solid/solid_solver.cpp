@@ -206,9 +206,9 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles) : p(par
   f_von_mises = &p.add_scalar_field("von_mises");
   f_pressure = &p.add_scalar_field("solid_pressure");
   f_fragment = &p.add_scalar_field("fragment", -1);
-  f_surface = &p.add_scalar_field("surface");
+  f_surface = &p.add_scalar_field(solid_fields::surface);
   f_displacement = &p.add_vector_field("displacement");
-  f_load = &p.add_vector_field("solid_load");
+  f_load = &p.add_vector_field(solid_fields::load);
 
   x.resize(ns);
   v.resize(ns);
