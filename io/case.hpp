@@ -20,8 +20,8 @@
 
 namespace mpsfsi {
 
-// io/, fluid/, solid/, coupling/ and app/ are 2D only (e.g. Vec(1, 0) below would be a size request for
-// a 3-vector); only core/ is dimension-generic. CMake builds them only for MPSFSI_DIM=2.
+// io/, fluid/, solid/, coupling/ and app/ are 2D only (2-component vectors in the case file, 2D rotations);
+// only core/ is dimension-generic. CMake builds them only for MPSFSI_DIM=2.
 static_assert(dim == 2, "mpsfsi: io, fluid, solid, coupling and app are 2D only; MPSFSI_DIM=3 builds core/ alone");
 
 /// An error in user input (case file or command line). Exit code 2.

@@ -977,6 +977,11 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidParamet
                                  "may stop; 0: off)");
   n.max_iterations = r.integer("max_iterations", n.max_iterations, [](const long long k) { return k >= 1; },
                                "a positive integer (iterations of the pressure solve)");
+  if (r.has("muelu_rebuild_every"))
+    r.source().fail(r.at("muelu_rebuild_every"),
+                    fmt::format("{}: this key was replaced by {} (full preconditioner setup every N steps, for every "
+                                "preconditioner); rename it",
+                                r.path_of("muelu_rebuild_every"), r.path_of("preconditioner_rebuild_every")));
   n.preconditioner_rebuild_every =
       r.integer("preconditioner_rebuild_every", n.preconditioner_rebuild_every, [](const long long k) { return k >= 1; },
                 "a positive integer (full preconditioner setup every N steps)");

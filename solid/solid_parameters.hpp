@@ -82,7 +82,7 @@ struct SolidLoadSpec {
   std::string name;
   std::string body;             ///< a solid body
   Rect region;                  ///< particles of the body inside (initial positions) are loaded
-  Vec direction = Vec(1, 0);    ///< unit direction of the force
+  Vec direction = Vec::UnitX();  ///< unit direction of the force
   Real peak = 0;                ///< peak pressure [Pa]
   Real time = 0;                ///< time of the peak [s]
   Real width = 1;               ///< 1/e half-width of the Gaussian [s]
@@ -113,7 +113,7 @@ struct SourceSpec {
   std::string body;               ///< a solid body
   SourceType type = SourceType::explosion;
   Vec position = Vec::Zero();     ///< source point [m] (in the reference configuration)
-  Vec direction = Vec(0, 1);      ///< force only: unit direction
+  Vec direction = Vec::UnitY();   ///< force only: unit direction
   Real amplitude = 1;             ///< M0 [N m/m] (explosion) or F0 [N/m] (force)
   Real radius = 0;                ///< stencil radius [m]; the parser's default is 2 dp
   WaveletSpec wavelet;

@@ -65,6 +65,10 @@ mpsfsi_cli_test(huge_dt_max_first_step_limited_by_gravity 0 "dt 9.03e-03 s \\(ac
 mpsfsi_cli_test(check_projection_warns 0 "projection: 3.12e\\+08 steps of dt = 3.2e-09 s \\(viscous\\).*warning: .* cannot finish in any sensible time"
   check ${db} --set materials.water.nu=1e3)
 
+# The legacy key names its replacement.
+mpsfsi_cli_test(legacy_muelu_rebuild_every 2 "fluid.muelu_rebuild_every: this key was replaced by fluid.preconditioner_rebuild_every"
+  check ${db} --set fluid.muelu_rebuild_every=5)
+
 # Command-line values that are refused (exit 2) rather than taken as defaults or as nothing.
 mpsfsi_cli_test(checkpoint_every_nan 2 "--checkpoint-every.*'nan': expected a positive, finite number"
   run ${db} --output ${run_dir}/ck_nan --checkpoint-every nan)
