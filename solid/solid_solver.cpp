@@ -33,6 +33,7 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
+#include "core/rotation.hpp"
 #include "solid/sources.hpp"
 
 #include <Eigen/Dense>
@@ -97,7 +98,9 @@ struct SolidSolver::Impl {
   std::vector<LocalIndex> pid;
   std::vector<GlobalId> gid;  ///< global id of solid k (to follow a reordering of the particle set)
   std::vector<Vec> x, v, x0, force;
-  std::vector<Real> theta, omega, torque, tr, pn, ch, sh;
+  std::vector<Rotation> rotation;     ///< each particle's rotation (eq. 45-46; a scalar angle in 2D)
+  std::vector<Angular> omega, torque;  ///< angular velocity and torque (the z component in 2D)
+  std::vector<Real> tr, pn, ch, sh;
   std::vector<Real> mass, inertia, lambda, mu, inv_n0, n_now, eps_max;
   std::vector<std::uint8_t> clamped, surface;
 
@@ -214,7 +217,8 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles) : p(par
   v.resize(ns);
   x0.resize(ns);
   force.assign(ns, Vec::Zero());
-  for (auto* a : {&theta, &omega, &torque, &tr, &pn, &ch, &sh, &mass, &inertia, &lambda, &mu, &inv_n0, &n_now, &eps_max})
+  rotation.resize(ns);
+  for (auto* a : {&omega, &torque, &tr, &pn, &ch, &sh, &mass, &inertia, &lambda, &mu, &inv_n0, &n_now, &eps_max})
     a->assign(ns, 0);
   clamped.assign(ns, 0);
   surface.assign(ns, 0);
@@ -359,7 +363,7 @@ void SolidSolver::Impl::gather() {
     const auto i = static_cast<std::size_t>(pid[k]);
     x[k] = p.position[i];
     v[k] = p.velocity[i];
-    theta[k] = (*f_theta)[i];
+    rotation[k] = Rotation((*f_theta)[i]);
     omega[k] = (*f_omega)[i];
   }
 }
@@ -369,7 +373,7 @@ void SolidSolver::Impl::scatter() {
     const auto i = static_cast<std::size_t>(pid[k]);
     p.position[i] = x[k];
     p.velocity[i] = v[k];
-    (*f_theta)[i] = theta[k];
+    (*f_theta)[i] = rotation[k].angle();
     (*f_omega)[i] = omega[k];
     (*f_surface)[i] = surface[k];  // eq. 48, current after every step (the coupling reads it)
   }
@@ -377,8 +381,8 @@ void SolidSolver::Impl::scatter() {
 
 void SolidSolver::Impl::compute_half_angles() {
   for (std::size_t k = 0; k < n(); ++k) {
-    ch[k] = std::cos(0.5 * theta[k]);
-    sh[k] = std::sin(0.5 * theta[k]);
+    ch[k] = std::cos(0.5 * rotation[k].angle());
+    sh[k] = std::sin(0.5 * rotation[k].angle());
   }
 }
 
@@ -576,14 +580,14 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     if (clamped[k]) {
       x[k] = tank.place(x0[k], tank_theta);
       v[k] = tank.velocity_at(x[k], tank_omega);
-      theta[k] = tank_theta;
+      rotation[k] = Rotation(tank_theta);
       omega[k] = tank_omega;
       continue;
     }
     v[k] += (dt / mass[k]) * force[k];
     x[k] += dt * v[k];
     omega[k] += (dt / inertia[k]) * torque[k];
-    theta[k] += dt * omega[k];
+    rotation[k] = Rotation::from_vector(dt * omega[k]) * rotation[k];  // eq. 46
     v2_max = std::max(v2_max, v[k].squaredNorm());
   }
   scatter();
