@@ -1,0 +1,104 @@
+// Distribution of the particles over the ranks of a communicator (domain decomposition by space): each
+// particle is owned by exactly one rank; a rank's region is a box of a Zoltan2 geometric partition
+// (RCB or MultiJagged on the particle coordinates, weighted by particle cost), the boxes on the outside
+// of the partition reaching to infinity so that the regions tile all space. Ghosts are copies of other
+// ranks' owned particles within the halo width of this rank's region. The halo API follows AMReX's
+// neighbour particles: migrate() (Redistribute), build_ghosts() (fillNeighbors), exchange_ghosts()
+// (updateNeighbors) and reverse_sum() (sumNeighbors). Every transfer carries global ids, the identity of
+// a particle on every rank.
+#pragma once
+
+#include "core/particles.hpp"
+#include "core/types.hpp"
+
+#include <mpi.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mpsfsi {
+
+/// Geometric partitioner of Zoltan2.
+enum class PartitionMethod { rcb, multijagged };
+
+struct DistributionSettings {
+  PartitionMethod method = PartitionMethod::rcb;
+  /// Ghosts: other ranks' particles within this distance of the region (the largest interaction radius
+  /// plus the skin) [m].
+  Real halo_width = 0;
+  /// Re-partition when (largest owned work) / (mean owned work) - 1 passes this.
+  Real imbalance_threshold = 0.1;
+};
+
+/// An axis-aligned box; the outer faces of a partition's boxes are +-infinity.
+struct Box {
+  Vec lo, hi;
+  bool contains(const Vec& x) const;
+  /// Euclidean distance from x to the box (0 inside).
+  Real distance(const Vec& x) const;
+};
+
+/// Counters of the last operations, for the run log (this rank's values).
+struct DistributionStats {
+  std::size_t n_migrated_out = 0;   ///< particles sent by the last migrate()
+  std::size_t n_ghosts = 0;         ///< ghosts held after the last build_ghosts()
+  std::size_t halo_bytes = 0;       ///< bytes sent by this rank in the last build_ghosts() + exchanges since
+  int n_partitions = 0;             ///< partitions computed so far
+  double t_partition = 0, t_migrate = 0, t_halo = 0;  ///< seconds, accumulated
+};
+
+class Distribution {
+ public:
+  Distribution(MPI_Comm comm, const DistributionSettings& settings);
+  ~Distribution();
+  Distribution(const Distribution&) = delete;
+  Distribution& operator=(const Distribution&) = delete;
+
+  int rank() const { return rank_; }
+  int n_ranks() const { return n_ranks_; }
+  MPI_Comm comm() const { return comm_; }
+
+  /// Partitions the owned particles of every rank with Zoltan2 (weights: one per owned particle, or all 1
+  /// when empty) and migrates them to their new owners. Drops the ghosts first. Collective.
+  void partition(ParticleSet& p, const std::vector<Real>& weights = {});
+  /// From a set that every rank holds entirely (a scene built on every rank): partitions it and keeps on
+  /// each rank only the particles it owns. Collective.
+  void distribute_replicated(ParticleSet& p, const std::vector<Real>& weights = {});
+  /// Sends every owned particle whose position left this rank's region to the rank whose region holds it
+  /// (all its arrays and fields). Drops the ghosts first. Collective.
+  void migrate(ParticleSet& p);
+  /// (largest owned work) / (mean owned work) - 1 over the ranks for these weights (empty: counts).
+  /// Collective.
+  Real imbalance(const ParticleSet& p, const std::vector<Real>& weights = {}) const;
+
+  /// Replaces the ghosts by copies (all arrays and fields) of the other ranks' owned particles within
+  /// the halo width of this rank's region, and remembers who sent what for the exchanges below. Ghosts
+  /// are appended after the owned particles in order of sending rank, then of the sender's local index.
+  /// Collective.
+  void build_ghosts(ParticleSet& p);
+  /// Refreshes the named fields ("position", "velocity" or registered scalar / vector fields) of the
+  /// ghosts from their owners, with the plan of the last build_ghosts(). Collective.
+  void exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields);
+  /// Adds the ghosts' values of the named fields into their owners' values and sets the ghosts' values to
+  /// zero (contributions computed at ghosts, e.g. a force on another rank's particle). Collective.
+  void reverse_sum(ParticleSet& p, const std::vector<std::string>& fields);
+
+  /// The rank whose region holds x.
+  int owner_of(const Vec& x) const;
+  /// Every rank's region (empty before the first partition).
+  const std::vector<Box>& regions() const { return regions_; }
+  const DistributionStats& stats() const { return stats_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  int rank_ = 0, n_ranks_ = 1;
+  DistributionSettings settings_;
+  std::vector<Box> regions_;
+  DistributionStats stats_;
+};
+
+}  // namespace mpsfsi
