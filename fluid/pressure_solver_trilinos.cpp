@@ -85,6 +85,36 @@ void set_parameter(Teuchos::ParameterList& list, const std::string& key, const s
   list.set(key, text);
 }
 
+/// Rows of a sparse block in CRS form with 32-bit offsets and column ids.
+struct CrsBlock {
+  std::vector<int> ptr{0};
+  std::vector<int> col;
+  std::vector<Scalar> val;
+  void clear() {
+    ptr.assign(1, 0);
+    col.clear();
+    val.clear();
+  }
+  std::size_t bytes() const { return ptr.capacity() * sizeof(int) + col.capacity() * sizeof(int) + val.capacity() * sizeof(Scalar); }
+  /// sum over row r of val x[col], with four partial sums (a row is a short dot product; one running sum
+  /// makes every row wait on the latency of each addition).
+  Scalar row_dot(const std::size_t r, const Scalar* x) const {
+    int k = ptr[r];
+    const int k1 = ptr[r + 1];
+    const int* c = col.data();
+    const Scalar* v = val.data();
+    Scalar s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+    for (; k + 3 < k1; k += 4) {
+      s0 += v[k] * x[c[k]];
+      s1 += v[k + 1] * x[c[k + 1]];
+      s2 += v[k + 2] * x[c[k + 2]];
+      s3 += v[k + 3] * x[c[k + 3]];
+    }
+    for (; k < k1; ++k) s0 += v[k] * x[c[k]];
+    return (s0 + s1) + (s2 + s3);
+  }
+};
+
 /// Symmetric Gauss-Seidel / SSOR (relaxation omega) preconditioned system by Eisenstat's trick, on each
 /// rank's diagonal block (block Jacobi between ranks, so it stays symmetric). With A = L + D + U + O (L, U
 /// the strictly lower / upper parts of the rank's block, O the couplings to other ranks' rows) and
@@ -93,17 +123,15 @@ void set_parameter(Teuchos::ParameterList& list, const std::string& key, const s
 /// and one product with Ah costs one pass over the matrix instead of three (SpMV + forward and backward
 /// sweeps): with w = D'^(1/2) v and t = (D' + U)^-1 w,
 ///   Ah v = D'^(1/2) (t + (D' + L)^-1 (w + (D - 2 D') t + O t)).
+/// The system holds A itself, split: L with its rows in order, U with its rows last one first, so that
+/// each sweep streams through its own half of the matrix in increasing addresses, and O with column-map
+/// ids. No Tpetra matrix is built on this path.
 class EisenstatSystem final : public OP {
  public:
-  // The matrix's own local CRS arrays (column-map ids, sorted by global id within each row, so a row is
-  // [ghosts below | L | diagonal | U | ghosts above]) and, per row, where L starts, the diagonal and
-  // where U ends. Owned row i is column-map id i + nb (nb: ghost columns below this rank's rows).
-  Matrix::local_matrix_host_type::row_map_type ptr;
-  Matrix::local_matrix_host_type::index_type col;
-  Matrix::local_matrix_host_type::values_type val;
-  std::vector<int> lo_begin, diag, up_end;
-  int nb = 0;
-  std::vector<Scalar> inv_dprime, sqrt_dprime, d_minus_2dprime;
+  CrsBlock lower;      ///< L: columns are this rank's row indices
+  CrsBlock upper_rev;  ///< U: block row r is matrix row n - 1 - r; columns are this rank's row indices
+  CrsBlock other;      ///< O: column-map ids
+  std::vector<Scalar> diag, inv_dprime, sqrt_dprime, d_minus_2dprime;
   RCP<const Map> row_map;
   RCP<const Tpetra::Import<LO, GO, Node>> importer;  // null on one rank
   RCP<MV> t_row, t_col;                              // t on the row and column maps when importer is set
@@ -112,29 +140,107 @@ class EisenstatSystem final : public OP {
   RCP<const Map> getDomainMap() const override { return row_map; }
   RCP<const Map> getRangeMap() const override { return row_map; }
   std::size_t size() const { return diag.size(); }
+  std::size_t bytes() const {
+    return lower.bytes() + upper_rev.bytes() + other.bytes() + 6 * diag.capacity() * sizeof(Scalar);
+  }
+
+  /// Splits this rank's rows (global columns; `local_column` maps a column of another rank's row to its
+  /// column-map id) and sets up the relaxation. Throws if a row has no positive diagonal.
+  template <class LocalColumn>
+  void set_rows(const LocalRows& sys, const Scalar omega, LocalColumn&& local_column) {
+    const std::size_t n = sys.rows.size();
+    const auto first = static_cast<GO>(sys.rows.begin), last = static_cast<GO>(sys.rows.end);
+    lower.clear();
+    upper_rev.clear();
+    other.clear();
+    diag.assign(n, 0.0);
+    std::vector<int>& upper_count = upper_rev.ptr;  // counts first, offsets after
+    upper_count.assign(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const GO me = first + static_cast<GO>(i);
+      for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k) {
+        const GO c = sys.col[k];
+        if (c == me) {
+          diag[i] += sys.value[k];
+        } else if (c < first || c >= last) {
+          other.col.push_back(local_column(c));
+          other.val.push_back(sys.value[k]);
+        } else if (c < me) {
+          lower.col.push_back(static_cast<int>(c - first));
+          lower.val.push_back(sys.value[k]);
+        } else {
+          ++upper_count[n - i];
+        }
+      }
+      lower.ptr.push_back(static_cast<int>(lower.col.size()));
+      other.ptr.push_back(static_cast<int>(other.col.size()));
+      if (!(diag[i] > 0))
+        throw std::runtime_error("pressure solve (sgs): row " + std::to_string(sys.rows.begin + i) +
+                                 " has no positive diagonal");
+    }
+    for (std::size_t r = 0; r < n; ++r) upper_count[r + 1] += upper_count[r];
+    upper_rev.col.resize(static_cast<std::size_t>(upper_count[n]));
+    upper_rev.val.resize(upper_rev.col.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      const GO me = first + static_cast<GO>(i);
+      int out = upper_rev.ptr[n - 1 - i];
+      for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k) {
+        const GO c = sys.col[k];
+        if (c > me && c < last) {
+          upper_rev.col[static_cast<std::size_t>(out)] = static_cast<int>(c - first);
+          upper_rev.val[static_cast<std::size_t>(out++)] = sys.value[k];
+        }
+      }
+    }
+    inv_dprime.resize(n);
+    sqrt_dprime.resize(n);
+    d_minus_2dprime.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Scalar dprime = diag[i] / omega;
+      inv_dprime[i] = 1.0 / dprime;
+      sqrt_dprime[i] = std::sqrt(dprime);
+      d_minus_2dprime[i] = diag[i] - 2 * dprime;
+    }
+  }
 
   /// (D' + U)^-1 w, backward (out may be w).
   void backward(const Scalar* w, Scalar* out) const {
-    for (std::size_t i = size(); i-- > 0;) {
-      Scalar sum = w[i];
-      for (int k = diag[i] + 1; k < up_end[i]; ++k) sum -= val(k) * out[col(k) - nb];
-      out[i] = sum * inv_dprime[i];
+    const std::size_t n = size();
+    for (std::size_t r = 0; r < n; ++r) {
+      const std::size_t i = n - 1 - r;
+      out[i] = (w[i] - upper_rev.row_dot(r, out)) * inv_dprime[i];
     }
   }
   /// (D' + L)^-1 s, forward (out may be s).
   void forward(const Scalar* s, Scalar* out) const {
     const std::size_t n = size();
-    for (std::size_t i = 0; i < n; ++i) {
-      Scalar sum = s[i];
-      for (int k = lo_begin[i]; k < diag[i]; ++k) sum -= val(k) * out[col(k) - nb];
-      out[i] = sum * inv_dprime[i];
-    }
+    for (std::size_t i = 0; i < n; ++i) out[i] = (s[i] - lower.row_dot(i, out)) * inv_dprime[i];
   }
   /// (D' + U) x, this rank's block only.
   Scalar upper_times(const std::size_t i, const Scalar* x) const {
-    Scalar sum = x[i] / inv_dprime[i];
-    for (int k = diag[i] + 1; k < up_end[i]; ++k) sum += val(k) * x[col(k) - nb];
-    return sum;
+    return x[i] / inv_dprime[i] + upper_rev.row_dot(size() - 1 - i, x);
+  }
+
+  /// The columns of other ranks' rows of `x` (row map) on the column map, or null on one rank.
+  const Scalar* import(const Scalar* x) const {
+    if (importer.is_null()) return nullptr;
+    {
+      auto tv = t_row->getLocalViewHost(Tpetra::Access::OverwriteAll);
+      for (std::size_t i = 0; i < size(); ++i) tv(i, 0) = x[i];
+    }
+    t_col->doImport(*t_row, *importer, Tpetra::INSERT);
+    return &t_col->getLocalViewHost(Tpetra::Access::ReadOnly)(0, 0);
+  }
+
+  /// r = b - A x (collective when the rows are split over ranks).
+  void residual(const Scalar* b, const Scalar* x, Scalar* r) const {
+    const std::size_t n = size();
+    const Scalar* xc = import(x);
+    for (std::size_t i = 0; i < n; ++i) {
+      Scalar ax = diag[i] * x[i] + lower.row_dot(i, x) + upper_rev.row_dot(n - 1 - i, x);
+      if (xc) ax += other.row_dot(i, xc);
+      r[i] = b[i] - ax;
+    }
   }
 
   void apply(const MV& X, MV& Y, Teuchos::ETransp /*mode*/ = Teuchos::NO_TRANS,
@@ -150,35 +256,20 @@ class EisenstatSystem final : public OP {
         auto xv = X.getLocalViewHost(Tpetra::Access::ReadOnly);
         const Scalar* v = n ? &xv(0, c) : nullptr;
         // Backward sweep t = (D' + U)^-1 w with w = D'^(1/2) v, fused with s = w + (D - 2 D') t in z.
-        for (std::size_t i = n; i-- > 0;) {
+        for (std::size_t r = 0; r < n; ++r) {
+          const std::size_t i = n - 1 - r;
           const Scalar w = sqrt_dprime[i] * v[i];
-          Scalar sum = w;
-          for (int k = diag[i] + 1; k < up_end[i]; ++k) sum -= val(k) * tp[col(k) - nb];
-          tp[i] = sum * inv_dprime[i];
+          tp[i] = (w - upper_rev.row_dot(r, tp)) * inv_dprime[i];
           zp[i] = w + d_minus_2dprime[i] * tp[i];
         }
       }
-      if (!importer.is_null()) {  // s += O t (couplings to the other ranks' rows)
-        {
-          auto tv = t_row->getLocalViewHost(Tpetra::Access::OverwriteAll);
-          for (std::size_t i = 0; i < n; ++i) tv(i, 0) = tp[i];
-        }
-        t_col->doImport(*t_row, *importer, Tpetra::INSERT);
-        auto tc = t_col->getLocalViewHost(Tpetra::Access::ReadOnly);
-        for (std::size_t i = 0; i < n; ++i) {
-          Scalar sum = 0;
-          for (auto k = static_cast<int>(ptr(i)); k < lo_begin[i]; ++k) sum += val(k) * tc(col(k), 0);
-          for (auto k = up_end[i]; k < static_cast<int>(ptr(i + 1)); ++k) sum += val(k) * tc(col(k), 0);
-          zp[i] += sum;
-        }
-      }
+      if (const Scalar* tc = import(tp))  // s += O t (couplings to the other ranks' rows)
+        for (std::size_t i = 0; i < n; ++i) zp[i] += other.row_dot(i, tc);
       // Forward sweep in place z = (D' + L)^-1 s (row i reads s_i before writing it, and finished rows
       // j < i), fused with Y = alpha D'^(1/2) (t + z) + beta Y.
       auto yv = Y.getLocalViewHost(Tpetra::Access::ReadWrite);
       for (std::size_t i = 0; i < n; ++i) {
-        Scalar sum = zp[i];
-        for (int k = lo_begin[i]; k < diag[i]; ++k) sum -= val(k) * zp[col(k) - nb];
-        zp[i] = sum * inv_dprime[i];
+        zp[i] = (zp[i] - lower.row_dot(i, zp)) * inv_dprime[i];
         const Scalar r = alpha * sqrt_dprime[i] * (tp[i] + zp[i]);
         yv(i, c) = beta == Scalar(0) ? r : beta * yv(i, c) + r;
       }
@@ -340,7 +431,13 @@ class TrilinosPressureSolver final : public PressureSolver {
   PressureSolveResult solve(const LocalRows& sys, std::vector<Real>& x) override {
     PressureSolveResult result;
     auto t0 = Clock::now();
-    build_matrix(sys);
+    update_maps(sys);
+    if (eisenstat_)
+      setup_eisenstat(sys);
+    else
+      build_matrix(sys);
+    if (n_ranks_ > 1)  // the column ids of this system are no longer needed
+      for (const GO g : col_gids_) local_of_global_[static_cast<std::size_t>(g)] = -1;
     // Right-hand side and warm start.
     {
       auto b = b_->getLocalViewHost(Tpetra::Access::OverwriteAll);
@@ -414,7 +511,6 @@ class TrilinosPressureSolver final : public PressureSolver {
   /// tighter tolerance on the transformed residual (at most twice).
   PressureSolveResult solve_eisenstat(const LocalRows& sys, std::vector<Real>& x, PressureSolveResult& result,
                                       const Scalar bnorm, Clock::time_point t0) {
-    setup_eisenstat(sys);
     EisenstatSystem& E = *eis_;
     const std::size_t n = sys.rows.size();
     {
@@ -446,8 +542,12 @@ class TrilinosPressureSolver final : public PressureSolver {
         for (std::size_t i = 0; i < n; ++i) E.t[i] = E.sqrt_dprime[i] * y(i, 0);
         E.backward(E.t.data(), &xv(0, 0));
       }
-      A_->apply(*x_, *r_);
-      r_->update(1.0, *b_, -1.0);
+      {
+        auto xv = x_->getLocalViewHost(Tpetra::Access::ReadOnly);
+        auto bv = b_->getLocalViewHost(Tpetra::Access::ReadOnly);
+        auto rv = r_->getLocalViewHost(Tpetra::Access::OverwriteAll);
+        if (n) E.residual(&bv(0, 0), &xv(0, 0), &rv(0, 0));
+      }
       Teuchos::Array<Scalar> rnorm(1);
       r_->norm2(rnorm());
       result.residual = rnorm[0] / bnorm;
@@ -467,7 +567,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     belos_->setParameters(belos_list_);
   }
 
-  /// Points the EisenstatSystem at the new matrix's local arrays and finds L, D and U in each row.
+  /// The EisenstatSystem of this system's rows (the matrix split into L, D, U and O).
   void setup_eisenstat(const LocalRows& sys) {
     if (eis_.is_null() || eis_->row_map != row_map_) {
       eis_ = rcp(new EisenstatSystem);
@@ -476,50 +576,18 @@ class TrilinosPressureSolver final : public PressureSolver {
       y_ = rcp(new MV(row_map_, 1));
     }
     EisenstatSystem& E = *eis_;
-    const std::size_t n = sys.rows.size();
-    const auto local = A_->getLocalMatrixHost();
-    E.ptr = local.graph.row_map;
-    E.col = local.graph.entries;
-    E.val = local.values;
     E.importer = importer_;
-    E.nb = 0;
-    if (!importer_.is_null()) {
-      const auto col_map = A_->getColMap();
-      E.nb = n ? static_cast<int>(col_map->getLocalElement(static_cast<GO>(sys.rows.begin))) : 0;
-      if (E.t_col.is_null() || !E.t_col->getMap()->isSameAs(*col_map)) {
-        E.t_row = rcp(new MV(row_map_, 1));
-        E.t_col = rcp(new MV(col_map, 1));
-      }
+    if (!importer_.is_null() && (E.t_col.is_null() || E.t_col->getMap() != col_map_)) {
+      E.t_row = rcp(new MV(row_map_, 1));
+      E.t_col = rcp(new MV(col_map_, 1));
     }
-    E.lo_begin.resize(n);
-    E.diag.resize(n);
-    E.up_end.resize(n);
-    E.inv_dprime.resize(n);
-    E.sqrt_dprime.resize(n);
-    E.d_minus_2dprime.resize(n);
-    const LO first = E.nb, last = E.nb + static_cast<LO>(n);  // owned column-map ids [first, last)
-    for (std::size_t i = 0; i < n; ++i) {
-      const LO me = first + static_cast<LO>(i);
-      int k = static_cast<int>(E.ptr(i));
-      const int k_end = static_cast<int>(E.ptr(i + 1));
-      while (k < k_end && E.col(k) < first) ++k;
-      E.lo_begin[i] = k;
-      while (k < k_end && E.col(k) < me) ++k;
-      if (k == k_end || E.col(k) != me || !(E.val(k) > 0))
-        throw std::runtime_error("pressure solve (sgs): row " + std::to_string(sys.rows.begin + i) +
-                                 " has no positive diagonal");
-      E.diag[i] = k;
-      while (k < k_end && E.col(k) < last) ++k;
-      E.up_end[i] = k;
-      const Scalar d = E.val(E.diag[i]), dprime = d / omega_;
-      E.inv_dprime[i] = 1.0 / dprime;
-      E.sqrt_dprime[i] = std::sqrt(dprime);
-      E.d_minus_2dprime[i] = d - 2 * dprime;
-    }
-    precond_bytes_ = 6 * n * sizeof(Scalar);
+    E.set_rows(sys, omega_, [&](const GO c) { return local_of_global_[static_cast<std::size_t>(c)]; });
+    precond_bytes_ = E.bytes();
   }
 
-  void build_matrix(const LocalRows& sys) {
+  /// Row map and vectors for this row count, and on several ranks the column map and Import of this
+  /// system's columns (local_of_global_ holds their column-map ids until the solve reset them).
+  void update_maps(const LocalRows& sys) {
     const std::size_t n_own = sys.rows.size();
     // Chebyshev's bound belongs to a matrix of the old row count (map_rows_ survives a restart, the map not).
     if (map_rows_ != sys.n_global_rows) lambda_max_ = 0;
@@ -535,32 +603,35 @@ class TrilinosPressureSolver final : public PressureSolver {
       importer_ = Teuchos::null;
       local_of_global_.assign(sys.n_global_rows, -1);
     }
+    if (n_ranks_ == 1) return;
     // Column map: the sorted set of global ids referenced by this rank's rows (sorted, so each row's
-    // local column ids stay sorted). On one rank it is the row map.
-    RCP<const Map> col_map = row_map_;
-    const std::size_t nnz = sys.col.size();
-    if (n_ranks_ > 1) {
-      col_gids_.clear();
-      for (const GO g : sys.col)
-        if (local_of_global_[static_cast<std::size_t>(g)] < 0) {
-          local_of_global_[static_cast<std::size_t>(g)] = 0;
-          col_gids_.push_back(g);
-        }
-      std::sort(col_gids_.begin(), col_gids_.end());
-      for (std::size_t k = 0; k < col_gids_.size(); ++k)
-        local_of_global_[static_cast<std::size_t>(col_gids_[k])] = static_cast<LO>(k);
-      // A new column map (and Import) only if the set of columns changed on some rank.
-      int changed = col_map_.is_null() || col_gids_ != old_col_gids_ ? 1 : 0;
-      MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_MAX, raw_comm_);
-      if (changed) {
-        col_map_ = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
-                               Teuchos::ArrayView<const GO>(col_gids_.data(), static_cast<int>(col_gids_.size())), 0,
-                               comm_));
-        importer_ = rcp(new Tpetra::Import<LO, GO, Node>(row_map_, col_map_));
-        old_col_gids_ = col_gids_;
+    // local column ids stay sorted).
+    col_gids_.clear();
+    for (const GO g : sys.col)
+      if (local_of_global_[static_cast<std::size_t>(g)] < 0) {
+        local_of_global_[static_cast<std::size_t>(g)] = 0;
+        col_gids_.push_back(g);
       }
-      col_map = col_map_;
+    std::sort(col_gids_.begin(), col_gids_.end());
+    for (std::size_t k = 0; k < col_gids_.size(); ++k)
+      local_of_global_[static_cast<std::size_t>(col_gids_[k])] = static_cast<LO>(k);
+    // A new column map (and Import) only if the set of columns changed on some rank.
+    int changed = col_map_.is_null() || col_gids_ != old_col_gids_ ? 1 : 0;
+    MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_MAX, raw_comm_);
+    if (changed) {
+      col_map_ = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                             Teuchos::ArrayView<const GO>(col_gids_.data(), static_cast<int>(col_gids_.size())), 0,
+                             comm_));
+      importer_ = rcp(new Tpetra::Import<LO, GO, Node>(row_map_, col_map_));
+      old_col_gids_ = col_gids_;
     }
+  }
+
+  /// The Tpetra matrix of this rank's rows, from the CRS arrays (after update_maps).
+  void build_matrix(const LocalRows& sys) {
+    const std::size_t n_own = sys.rows.size();
+    const RCP<const Map> col_map = n_ranks_ > 1 ? col_map_ : row_map_;
+    const std::size_t nnz = sys.col.size();
     using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
     using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
     using Values = Matrix::local_matrix_device_type::values_type;
@@ -570,11 +641,11 @@ class TrilinosPressureSolver final : public PressureSolver {
     for (std::size_t k = 0; k <= n_own; ++k) ptr(k) = sys.row_ptr[k];
     if (n_ranks_ > 1) {
       for (std::size_t k = 0; k < nnz; ++k) ind(k) = local_of_global_[static_cast<std::size_t>(sys.col[k])];
-      for (const GO g : col_gids_) local_of_global_[static_cast<std::size_t>(g)] = -1;
     } else {
       for (std::size_t k = 0; k < nnz; ++k) ind(k) = static_cast<LO>(sys.col[k]);
     }
     for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
+    A_ = Teuchos::null;  // release the old arrays first
     A_ = rcp(new Matrix(row_map_, col_map, ptr, ind, val));
     A_->expertStaticFillComplete(row_map_, row_map_, importer_);
   }
