@@ -30,6 +30,8 @@ struct DistributionSettings {
   Real halo_width = 0;
   /// Re-partition when (largest owned work) / (mean owned work) - 1 passes this.
   Real imbalance_threshold = 0.1;
+  /// Every particle on rank 0, the other ranks' regions empty: for modules not distributed yet (the solid).
+  bool all_on_rank0 = false;
 };
 
 /// An axis-aligned box; the outer faces of a partition's boxes are +-infinity.
@@ -57,6 +59,7 @@ class Distribution {
   Distribution& operator=(const Distribution&) = delete;
 
   int rank() const { return rank_; }
+  const DistributionSettings& settings() const { return settings_; }
   int n_ranks() const { return n_ranks_; }
   MPI_Comm comm() const { return comm_; }
 
@@ -85,6 +88,11 @@ class Distribution {
   /// zero (contributions computed at ghosts, e.g. a force on another rank's particle). Collective.
   void reverse_sum(ParticleSet& p, const std::vector<std::string>& fields);
 
+  /// The rank that owns ghost k (the particle of local index n_owned() + k) since the last build_ghosts().
+  int ghost_owner(std::size_t k) const;
+  /// On rank `root`: every rank's owned particles (all arrays), in order of global id; elsewhere an empty
+  /// set with the same fields. Collective.
+  ParticleSet gather(const ParticleSet& p, int root) const;
   /// The rank whose region holds x.
   int owner_of(const Vec& x) const;
   /// Every rank's region (empty before the first partition).

@@ -2,9 +2,13 @@
 // the domain), frames, probes and receivers, progress line and JSON-lines run log, checkpoints and restarts
 // (the run loop's own state plus each participant's save_state / load_state, in named sections). With both
 // fluid and solid the steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with
-// the solid's bond damping and the load relaxation of the case's coupling map.
+// the solid's bond damping and the load relaxation of the case's coupling map. On several ranks the
+// particles are distributed (core/distribution.hpp): each rank steps, checks and writes (one piece per
+// frame) its owned particles, and checkpoints gather the state by global id on rank 0. The solid and the
+// coupling are not distributed yet: a case with a solid keeps every particle on rank 0.
 #include "coupling/simulation.hpp"
 
+#include "core/distribution.hpp"
 #include "core/files.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/fsi_interface.hpp"
@@ -45,6 +49,35 @@ int rank_of(MPI_Comm comm) {
   return rank;
 }
 
+int size_of(MPI_Comm comm) {
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  return size;
+}
+
+/// Every rank registers the extra fields of rank 0 (the solid's, registered on rank 0 alone), so that all
+/// ranks' particles carry the same arrays.
+void share_fields(ParticleSet& p, MPI_Comm comm) {
+  std::string names;  // "s:name\n" or "v:name\n"
+  if (rank_of(comm) == 0) {
+    for (const auto& kv : p.scalar_fields()) names += "s:" + kv.first + "\n";
+    for (const auto& kv : p.vector_fields()) names += "v:" + kv.first + "\n";
+  }
+  std::uint64_t n = names.size();
+  MPI_Bcast(&n, 1, MPI_UINT64_T, 0, comm);
+  names.resize(n);
+  if (n > 0) MPI_Bcast(names.data(), static_cast<int>(n), MPI_CHAR, 0, comm);
+  for (std::size_t a = 0; a < names.size();) {
+    const std::size_t e = names.find('\n', a);
+    const std::string name = names.substr(a + 2, e - a - 2);
+    if (names[a] == 's')
+      p.add_scalar_field(name);
+    else
+      p.add_vector_field(name);
+    a = e + 1;
+  }
+}
+
 long peak_memory_kib() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -80,33 +113,47 @@ class RunLoop {
  public:
   RunLoop(const CaseSpec& spec, Scene& scene, const RunSettings& settings, MPI_Comm comm)
       : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec), comm_(comm),
-        writer_(settings.output_dir, "particles"),
+        writer_(settings.output_dir, "particles", rank_of(comm), size_of(comm)),
         probes_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/probes.csv" : std::string(),
                 appends("probes.csv")),
         receivers_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/receivers.csv" : std::string(),
                    appends("receivers.csv")) {
     MPI_Comm_rank(comm, &rank_);
     MPI_Comm_size(comm, &n_ranks_);
-    initial_fluid_ = fluid_per_body();
+    // The scene is whole on every rank here: count, then distribute.
+    initial_fluid_ = fluid_per_body(false);
     log_ = rank_ == 0 && !settings.quiet;
     tty_ = log_ && isatty(fileno(stdout));
     const bool has_fluid = p_.n_of_kind(ParticleKind::fluid) > 0, has_solid = p_.n_of_kind(ParticleKind::solid) > 0;
+    has_solid_ = has_solid;
+    DistributionSettings ds;
+    // The halo: the fluid's neighbour radius plus a skin of one particle spacing (a step moves particles by
+    // a fraction of dp; the owners and ghosts are renewed at every step).
+    ds.halo_width = (has_fluid ? fluid_interaction_radius(fluid_setup(spec)) : 0) + spec.dp;
+    ds.all_on_rank0 = has_solid;
+    dist_ = std::make_unique<Distribution>(comm, ds);
+    dist_->distribute_replicated(p_);
     if (has_fluid)
-      fluid_ = std::make_unique<FluidSolver>(fluid_setup(spec), p_, comm, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
-    try {
-      if (has_solid) solid_ = std::make_unique<SolidSolver>(solid_setup(spec), p_);
-    } catch (const SetupError& e) {  // the case does not fit the scene: bad input (exit 2), as before the solver
-      throw CaseError(e.what());
-    }
-    if (solid_ && rank_ == 0) solid_->set_output_directory(settings.output_dir, appends("fragments.csv"));
-    if (fluid_ && solid_) {
-      FsiOptions fo;
-      fo.load_relaxation = spec.coupling.load_relaxation;
-      solid_->set_damping(spec.coupling.solid_damping);
-      coupling_ = std::make_unique<FsiInterface>(spec, p_, fo);
-      coupling_->initialize();
-      if (rank_ == 0) coupling_->open_csv(settings.output_dir + "/interface.csv", appends("interface.csv"));
-    }
+      fluid_ = std::make_unique<FluidSolver>(fluid_setup(spec), p_, *dist_, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
+    // The solid and the coupling live on rank 0, which holds every particle of a case with a solid.
+    on_rank0(comm, [&] {
+      if (!has_solid) return;
+      try {
+        solid_ = std::make_unique<SolidSolver>(solid_setup(spec), p_);
+      } catch (const SetupError& e) {  // the case does not fit the scene: bad input (exit 2), as before the solver
+        throw CaseError(e.what());
+      }
+      solid_->set_output_directory(settings.output_dir, appends("fragments.csv"));
+      if (fluid_) {
+        FsiOptions fo;
+        fo.load_relaxation = spec.coupling.load_relaxation;
+        solid_->set_damping(spec.coupling.solid_damping);
+        coupling_ = std::make_unique<FsiInterface>(spec, p_, fo);
+        coupling_->initialize();
+        coupling_->open_csv(settings.output_dir + "/interface.csv", appends("interface.csv"));
+      }
+    });
+    if (n_ranks_ > 1) share_fields(p_, comm);
     check_output_fields();
     writer_.set_fields(spec.output.fields);
     summary_.pvd_path = writer_.pvd_path();
@@ -159,6 +206,7 @@ class RunLoop {
     summary_.end_time = t_;
     summary_.wall_seconds = seconds_since(t_start);
     summary_.peak_memory_kib = peak_memory_kib();
+    if (n_ranks_ > 1) MPI_Allreduce(MPI_IN_PLACE, &summary_.peak_memory_kib, 1, MPI_LONG, MPI_MAX, comm_);
     if (rank_ == 0)
       jsonl_ << fmt::format(
           "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
@@ -175,7 +223,7 @@ class RunLoop {
     Real dt = 0;
     if (fluid_) {
       dt = fluid_->stable_dt(&limit);
-    } else {
+    } else if (solid_) {
       dt = spec_.solid.dt ? *spec_.solid.dt : solid_->stable_dt();
       limit = spec_.solid.dt ? "fixed" : "solid stability";
     }
@@ -201,6 +249,16 @@ class RunLoop {
                      n_sub);
         raised_said_ = true;
       }
+    }
+    if (n_ranks_ > 1) {  // rank 0, which holds any solid, decides the step for all
+      MPI_Bcast(&dt, 1, MPI_DOUBLE, 0, comm_);
+      MPI_Bcast(&n_sub, 1, MPI_INT, 0, comm_);
+      limit = agreed_message(comm_, rank_ == 0 ? limit : std::string());
+    }
+    if (n_ranks_ > 1 && !has_solid_ && step_ % repartition_every == 0) {
+      const auto t0 = Clock::now();
+      if (dist_->imbalance(p_) > dist_->settings().imbalance_threshold) dist_->partition(p_);
+      summary_.t_fluid += seconds_since(t0);
     }
     try {
       if (coupling_) {
@@ -231,13 +289,21 @@ class RunLoop {
         for (int k = 0; k < n_sub; ++k) solid_->advance(t_ + k * dts, dts);
         summary_.t_solid += seconds_since(t0);
       }
+    } catch (const RunFailure& e) {
+      fail_within_step(e.what());
+    } catch (const std::exception& e) {
+      fail_within_step(fmt::format("step {} (t = {:.6g} s): {}", step_ + 1, t_, e.what()));
+    }
+    // The state checks: each rank looks at its particles, the first finding stops every rank.
+    std::string finding;
+    try {
       check_state(step_ + 1, t_ + dt);
       if (last_fluid_.n_removed > 0) check_losses(step_ + 1, t_ + dt);
     } catch (const RunFailure& e) {
-      fail(e.what());
-    } catch (const std::exception& e) {
-      fail(fmt::format("step {} (t = {:.6g} s): {}", step_ + 1, t_, e.what()));
+      finding = e.what();
     }
+    finding = agreed_message(comm_, finding);
+    if (!finding.empty()) fail(finding);
     t_ += dt;
     ++step_;
     dt_ = dt;
@@ -248,7 +314,7 @@ class RunLoop {
 
   /// Non-finite state, runaway speed, solid particles leaving the domain: the first offender is named.
   void check_state(const std::size_t step, const Real t) const {
-    for (std::size_t i = 0; i < p_.size(); ++i) {
+    for (std::size_t i = 0; i < p_.n_owned(); ++i) {
       const auto where = [&] {
         return fmt::format("particle {} ({} of body '{}') at ({:.6g}, {:.6g})", p_.global_id[i], to_string(p_.kind[i]),
                            p_.bodies[p_.body[i]].name, p_.position[i][0], p_.position[i][1]);
@@ -290,12 +356,14 @@ class RunLoop {
                                     fmt::join(known, ", ")));
   }
 
-  /// Fluid particles of each body (by body index).
-  std::vector<std::size_t> fluid_per_body() const {
-    std::vector<std::size_t> n(p_.bodies.size(), 0);
-    for (std::size_t i = 0; i < p_.size(); ++i)
+  /// Fluid particles of each body (by body index), over the ranks (sum) or on this rank.
+  std::vector<std::size_t> fluid_per_body(const bool over_ranks = true) const {
+    std::vector<unsigned long long> n(p_.bodies.size(), 0);
+    for (std::size_t i = 0; i < p_.n_owned(); ++i)
       if (p_.kind[i] == ParticleKind::fluid) ++n[p_.body[i]];
-    return n;
+    if (over_ranks && n_ranks_ > 1)
+      MPI_Allreduce(MPI_IN_PLACE, n.data(), static_cast<int>(n.size()), MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm_);
+    return {n.begin(), n.end()};
   }
 
   /// A fluid body that lost more than fluid.max_loss of its particles through the domain's boundary stops
@@ -320,8 +388,14 @@ class RunLoop {
   /// Before the first step: the number of steps the run needs at its first dt (and the solid's sub-steps),
   /// with a warning when that cannot finish in any sensible time.
   void report_projection() {
+    if (n_ranks_ > 1) {  // the counts are sums over the ranks (a collective)
+      const RunProjection r = project_run(spec_, p_, t_, comm_);
+      if (log_) fmt::print("{}\n", r.text());
+      std::fflush(stdout);
+      return;
+    }
     if (!log_) return;
-    const RunProjection r = project_run(spec_, p_, t_);
+    const RunProjection r = project_run(spec_, p_, t_, comm_);
     fmt::print("{}\n", r.text());
     std::fflush(stdout);
   }
@@ -367,15 +441,27 @@ class RunLoop {
       copy_every_ = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(copy_seconds / (0.02 * step_seconds_))));
   }
 
-  /// Write the last good state as a frame, log the diagnosis, and throw.
+  /// A step that threw on this rank: on one rank, fail(); on several, the other ranks may be waiting in a
+  /// collective of the step, so this rank says why and ends the job (exit 3).
+  [[noreturn]] void fail_within_step(const std::string& diagnosis) {
+    if (n_ranks_ == 1) fail(diagnosis);
+    std::fprintf(stderr, "mpsfsi: error (rank %d of %d): %s\n", rank_, n_ranks_, diagnosis.c_str());
+    std::fflush(stderr);
+    MPI_Abort(comm_, 3);
+    std::abort();  // not reached
+  }
+
+  /// Write the last good state as a frame, log the diagnosis, and throw (all ranks together).
   [[noreturn]] void fail(const std::string& diagnosis) {
     std::string frame;
+    try {
+      on_every_rank(comm_, [&] { writer_.write_piece(last_good_, last_good_t_); });
+      on_rank0(comm_, [&] { frame = writer_.commit_frame(last_good_t_); });
+      if (rank_ != 0) writer_.commit_frame(last_good_t_);
+    } catch (const std::exception& e) {
+      frame = std::string("(could not be written: ") + e.what() + ")";
+    }
     if (rank_ == 0) {
-      try {
-        frame = writer_.write(last_good_, last_good_t_);
-      } catch (const std::exception& e) {
-        frame = std::string("(could not be written: ") + e.what() + ")";
-      }
       jsonl_ << fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}\n", step_ + 1, t_,
                             json_escape(diagnosis));
       jsonl_.flush();
@@ -390,13 +476,19 @@ class RunLoop {
   void write_output() {
     const auto t0 = Clock::now();
     if (solid_) solid_->prepare_output(t_);
+    const std::vector<Real> probe_values = probes_.evaluate(p_, t_, comm_);
     try {
-      on_rank0(comm_, [&] {
+      // Every rank writes its piece; once all are complete, rank 0 adds the frame to the series.
+      on_every_rank(comm_, [&] {
         if (!log_error_.empty()) throw OutputError(log_error_);  // found on rank 0 alone, stops all ranks here
-        writer_.write(p_, t_);
-        probes_.record(t_, p_);
+        writer_.write_piece(p_, t_);
+      });
+      on_rank0(comm_, [&] {
+        writer_.commit_frame(t_);
+        probes_.record(t_, probe_values);
         if (coupling_) coupling_->write_csv(t_);
       });
+      if (rank_ != 0) writer_.commit_frame(t_);
     } catch (const OutputError& e) {
       throw OutputError(stopped_by_output(e.what()));
     }
@@ -420,8 +512,9 @@ class RunLoop {
   }
 
   void report_progress(const Clock::time_point t_start, const bool final) {
-    if (rank_ != 0) return;
     const bool periodic = step_ % static_cast<std::size_t>(std::max(1, settings_.log_every)) == 0 || step_ == 1;
+    if (n_ranks_ > 1 && (periodic || final) && step_ != logged_step_) report_distribution();
+    if (rank_ != 0) return;
     const double wall = seconds_since(t_start);
     const double rate = wall > 0 ? static_cast<double>(step_ - step_begin_) / wall : 0;
     const double frac = spec_.time.end > 0 ? t_ / spec_.time.end : 1;
@@ -459,6 +552,27 @@ class RunLoop {
     }
   }
 
+  /// Several ranks: the owned particles per rank, their imbalance, the time in owners and ghosts, the
+  /// partitions so far (run.jsonl, event "distribution"; a collective).
+  void report_distribution() {
+    const DistributionStats& d = dist_->stats();
+    unsigned long long owned = p_.n_owned();
+    std::vector<unsigned long long> all(static_cast<std::size_t>(n_ranks_));
+    MPI_Gather(&owned, 1, MPI_UNSIGNED_LONG_LONG, all.data(), 1, MPI_UNSIGNED_LONG_LONG, 0, comm_);
+    double times[3] = {d.t_partition, d.t_migrate, d.t_halo};
+    MPI_Allreduce(MPI_IN_PLACE, times, 3, MPI_DOUBLE, MPI_MAX, comm_);
+    if (rank_ != 0) return;
+    double mean = 0, largest = 0;
+    for (const auto n : all) {
+      mean += static_cast<double>(n) / n_ranks_;
+      largest = std::max(largest, static_cast<double>(n));
+    }
+    jsonl_ << fmt::format(
+        "{{\"event\":\"distribution\",\"step\":{},\"owned\":[{}],\"imbalance\":{:.4f},\"partitions\":{},"
+        "\"t_partition\":{:.3f},\"t_migrate\":{:.3f},\"t_halo\":{:.3f}}}\n",
+        step_, fmt::join(all, ","), mean > 0 ? largest / mean - 1 : 0.0, d.n_partitions, times[0], times[1], times[2]);
+  }
+
   bool appends(const std::string& file) const {
     return std::find(settings_.append_files.begin(), settings_.append_files.end(), file) != settings_.append_files.end();
   }
@@ -488,17 +602,18 @@ class RunLoop {
   /// a failure stops the run on every rank.
   void write_checkpoint_now() {
     try {
-      on_rank0(comm_, [&] { write_checkpoint_on_rank0(); });
+      const ParticleSet all = dist_->gather(p_, 0);  // rank 0: every particle, by global id
+      on_rank0(comm_, [&] { write_checkpoint_on_rank0(all); });
     } catch (const OutputError& e) {
       throw OutputError(stopped_by_output(e.what()));
     }
   }
 
-  void write_checkpoint_on_rank0() {
+  void write_checkpoint_on_rank0(const ParticleSet& all) {
     const auto t0 = Clock::now();
     BinaryWriter w;
     save_run_state(w);
-    p_.save_state(w);
+    all.save_state(w);
     if (fluid_) fluid_->save_state(w);
     if (solid_) solid_->save_state(w);
     if (coupling_) coupling_->save_state(w);
@@ -514,7 +629,7 @@ class RunLoop {
     info.resolved_yaml = spec_.resolved_yaml;
     info.time = t_;
     info.step = step_;
-    info.n_particles = p_.size();
+    info.n_particles = all.size();
     info.n_ranks = n_ranks_;
     info.next_frame = writer_.next_frame();
     info.frames = writer_.frames();
@@ -559,18 +674,22 @@ class RunLoop {
       last_fluid_.residual = in.f64("the pressure-solve residual");
       const bool fluid = in.boolean("the fluid flag"), solid = in.boolean("the solid flag"),
                  coupled = in.boolean("the coupling flag");
-      if (fluid != (fluid_ != nullptr) || solid != (solid_ != nullptr) || coupled != (coupling_ != nullptr))
+      if (fluid != (fluid_ != nullptr) || solid != has_solid_ || coupled != (has_solid_ && fluid_ != nullptr))
         in.fail("the checkpoint's run has other participants (fluid, solid, coupling) than this case");
       receivers_.load_state(in);
-      p_.load_state(in);
+      p_.drop_ghosts();
+      p_.load_state(in);  // every particle, on every rank: distributed below
       if (fluid_) exact_ = fluid_->load_state(in);
       if (solid_) solid_->load_state(in);
       if (coupling_) coupling_->load_state(in);
-      in.expect_section("end");
-      if (!in.at_end()) in.fail("unexpected data after the state");
+      if (rank_ == 0 || !has_solid_) {  // the solid's sections are rank 0's
+        in.expect_section("end");
+        if (!in.at_end()) in.fail("unexpected data after the state");
+      }
     } catch (const StateFormatError& e) {
       throw CaseError(std::string("checkpoint ") + e.what());
     }
+    dist_->distribute_replicated(p_);
     if (!exact_ && log_)
       fmt::print("note: the pressure preconditioner the checkpoint's run kept between setups "
                  "(fluid.preconditioner_rebuild_every > 1) cannot be rebuilt here (it was saved on several ranks, or "
@@ -612,6 +731,10 @@ class RunLoop {
   VtkSeriesWriter writer_;
   ProbeWriter probes_;
   ReceiverWriter receivers_;  ///< receivers.csv (rank 0), rows every step or every receivers.interval
+  std::unique_ptr<Distribution> dist_;
+  bool has_solid_ = false;  ///< the case has a solid (on rank 0: solid_)
+  /// Steps between checks of the owned work's balance (re-partition above the threshold).
+  static constexpr std::size_t repartition_every = 20;
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<SolidSolver> solid_;
   std::unique_ptr<FsiInterface> coupling_;
@@ -642,11 +765,11 @@ class RunLoop {
 
 }  // namespace
 
-RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real t) {
+RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real t, MPI_Comm comm) {
   RunProjection r;
   Real v_max = 0, nu = 0, c_p = 0;
-  std::size_t n_fluid = 0, n_solid = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
+  unsigned long long n_fluid = 0, n_solid = 0, n_all = p.n_owned();
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
     const auto m = static_cast<std::size_t>(std::max<int>(0, p.material[i]));
     if (p.kind[i] == ParticleKind::fluid && m < spec.fluid_materials.size()) {
       ++n_fluid;
@@ -656,6 +779,14 @@ RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real
       ++n_solid;
       c_p = std::max(c_p, p_wave_speed(spec.solid_materials[m], spec.solid));
     }
+  }
+  if (size_of(comm) > 1) {
+    Real maxima[3] = {v_max, nu, c_p};
+    unsigned long long counts[3] = {n_fluid, n_solid, n_all};
+    MPI_Allreduce(MPI_IN_PLACE, maxima, 3, MPI_DOUBLE, MPI_MAX, comm);
+    MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
+    v_max = maxima[0], nu = maxima[1], c_p = maxima[2];
+    n_fluid = counts[0], n_solid = counts[1], n_all = counts[2];
   }
   const Real dt_solid = c_p > 0 ? spec.solid.dt_factor * spec.dp / c_p : 0;
   if (n_fluid > 0) {
@@ -668,7 +799,7 @@ RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real
   if (!(r.dt > 0)) return r;
   r.n_steps = std::max<Real>(0, spec.time.end - t) / r.dt;
   r.n_solid_steps = n_solid == 0 ? 0 : n_fluid > 0 ? r.n_steps * r.subcycles : r.n_steps;
-  r.particle_steps = static_cast<double>(p.size()) * (n_fluid > 0 ? r.n_steps : 0) +
+  r.particle_steps = static_cast<double>(n_all) * (n_fluid > 0 ? r.n_steps : 0) +
                      static_cast<double>(n_solid) * r.n_solid_steps;
   r.absurd = !(r.particle_steps <= 1e12) || !(r.n_steps <= 1e8);
   return r;

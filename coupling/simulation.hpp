@@ -76,7 +76,7 @@ struct RunProjection {
 
 /// The projection of a case from time t at the current state of `particles` (the first dt of the fluid's
 /// limits, fluid_stable_dt, and of the solid's, dt_factor dp / c_p).
-RunProjection project_run(const CaseSpec& spec, const ParticleSet& particles, Real t = 0);
+RunProjection project_run(const CaseSpec& spec, const ParticleSet& particles, Real t = 0, MPI_Comm comm = MPI_COMM_SELF);
 
 /// Run a case to its end time. Throws RunFailure (after writing the last good frame) when the
 /// state becomes invalid.

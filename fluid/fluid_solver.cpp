@@ -4,10 +4,13 @@
 // and relaxation (eq. 22-23; the alpha term enters the matrix as 1/(c^2 dt^2), see
 // shared/notes/mps-practice.md), the correction (eq. 19, 24) with the minimum-pressure gradient (eq. 9 with
 // p_min) or the corrected gradient (eq. 14-15), and the time-step control (eq. 52 plus the viscous limit).
-// Every rank holds all particles and does the same explicit work; only the PPE rows are distributed.
+// Each rank advances the particles it owns (core/distribution.hpp): at the start of a step the owners
+// are updated and the ghosts rebuilt; each phase refreshes at the ghosts the fields the next one reads.
+// The PPE rows are the owned particles with a pressure unknown, named by their global ids.
 #include "fluid/fluid_solver.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/distribution.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
@@ -46,11 +49,11 @@ inline bool has_row(const Role r) { return r == Role::fluid || r == Role::bounda
 }  // namespace
 
 struct FluidSolver::Impl {
-  Impl(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
-      : p(particles), opt(options), motion(make_tank_motion(setup.tank_motion)) {
+  Impl(const FluidSetup& setup, ParticleSet& particles, Distribution& distribution, const FluidOptions& options)
+      : p(particles), dist(distribution), opt(options), motion(make_tank_motion(setup.tank_motion)) {
     const FluidParameters& fluid = setup.parameters;
-    MPI_Comm_rank(comm, &rank);
-    this->comm = comm;
+    comm = dist.comm();
+    rank = dist.rank();
     dp = setup.dp;
     re_g = fluid.re_gradient * dp;
     re_l = fluid.re_laplacian * dp;
@@ -63,13 +66,16 @@ struct FluidSolver::Impl {
     gravity = setup.gravity;
     time = setup.time;
     // One fluid material: the PPE is written for one density.
-    int material = -1;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (p.kind[i] != ParticleKind::fluid) continue;
-      if (material < 0) material = p.material[i];
-      if (p.material[i] != material)
-        throw std::invalid_argument("the fluid solver supports one fluid material per case");
-    }
+    int materials[2] = {-1, -1};  // the largest and (negated) the smallest fluid material over the ranks
+    for (std::size_t i = 0; i < p.n_owned(); ++i)
+      if (p.kind[i] == ParticleKind::fluid) {
+        materials[0] = std::max(materials[0], static_cast<int>(p.material[i]));
+        materials[1] = std::max(materials[1], -static_cast<int>(p.material[i]));
+      }
+    MPI_Allreduce(MPI_IN_PLACE, materials, 2, MPI_INT, MPI_MAX, comm);
+    const int material = materials[0];
+    if (material >= 0 && -materials[1] != material)
+      throw std::invalid_argument("the fluid solver supports one fluid material per case");
     if (material < 0 || material >= static_cast<int>(setup.materials.size()))
       throw std::invalid_argument("the fluid solver needs fluid particles with a fluid material");
     const FluidMaterial& m = setup.materials[static_cast<std::size_t>(material)];
@@ -92,10 +98,14 @@ struct FluidSolver::Impl {
 
     p.add_scalar_field(fluid_fields::pressure, 0.0);
     p.add_scalar_field(fluid_fields::free_surface, 0.0);
-    if (motion.moving())
-      for (std::size_t i = 0; i < p.size(); ++i)
-        if (p.kind[i] == ParticleKind::wall || p.kind[i] == ParticleKind::dummy) wall_reference[p.global_id[i]] = p.position[i];
+    if (motion.moving() && !p.has_vector_field(wall_reference_field)) {
+      auto& reference = p.add_vector_field(wall_reference_field);
+      for (std::size_t i = 0; i < p.size(); ++i) reference[i] = p.position[i];
+    }
   }
+
+  /// The particle field that holds each wall particle's position in the tank's rest frame (moving tanks).
+  static constexpr const char* wall_reference_field = "wall_reference";
 
   Role role(const ParticleKind k) const {
     switch (k) {
@@ -125,11 +135,10 @@ struct FluidSolver::Impl {
     if (!motion.moving()) return;
     const auto [theta, omega] = motion.at(t);
     wall_omega = omega;
+    const auto& reference = p.vector_field(wall_reference_field);
     for (std::size_t i = 0; i < p.size(); ++i) {
       if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
-      const auto it = wall_reference.find(p.global_id[i]);
-      if (it == wall_reference.end()) continue;
-      p.position[i] = motion.place(it->second, theta);
+      p.position[i] = motion.place(reference[i], theta);
       p.velocity[i] = motion.velocity_at(p.position[i], omega);
     }
   }
@@ -138,7 +147,7 @@ struct FluidSolver::Impl {
   /// friction k (fluid.lateral_walls), the velocity relative to the tank then decays exactly over the step:
   /// v* = v_wall + (v* - v_wall) exp(-k dt), v_wall the rigid velocity of the tank at the particle.
   void predict(const Real dt) {
-    const std::size_t n = p.size();
+    const std::size_t n = p.n_owned();
     const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
     const Real decay = std::exp(-lateral_friction * dt);
     const bool friction = lateral_friction > 0;
@@ -157,7 +166,7 @@ struct FluidSolver::Impl {
 
   /// Pairs within re_g at the predicted positions (a filtered copy of the big list).
   void build_near_list() {
-    const std::size_t n = p.size();
+    const std::size_t n = p.n_owned();
     near.radius = re_g;
     near.support_only = true;
     near.offset.resize(n + 1);
@@ -183,7 +192,7 @@ struct FluidSolver::Impl {
   /// exchange momentum along their line with restitution e; boundaries have infinite mass.
   void collide(const Real dt) {
     const Real dc2 = std::pow(opt.collision_distance * dp, 2);
-    const std::size_t n = p.size();
+    const std::size_t n = p.n_owned();
     v_new.resize(n);
     for (std::size_t i = 0; i < n; ++i) v_new[i] = p.velocity[i];
     for (std::size_t i = 0; i < n; ++i) {
@@ -211,7 +220,7 @@ struct FluidSolver::Impl {
 
   /// Eq. 8 at the predicted positions: n*, the neighbour count N, and the free-surface double check.
   void density_and_surface() {
-    const std::size_t n = p.size();
+    const std::size_t n = p.n_owned();
     n_star.resize(n);
     auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::vector<Real>* offset = nullptr;
@@ -227,28 +236,41 @@ struct FluidSolver::Impl {
     }
   }
 
-  /// Eq. 23 assembled for this rank's rows: -lap P + P / (c^2 dt^2) = kappa rho / dt^2 (n* - n0) / n0, with
-  /// p = 0 rows (free surface) as identity rows dropped from the other rows' columns (keeps symmetry).
+  /// Eq. 23 assembled for this rank's rows (its owned particles with a pressure unknown): -lap P + P / (c^2
+  /// dt^2) = kappa rho / dt^2 (n* - n0) / n0, with p = 0 rows (free surface) as identity rows dropped from
+  /// the other rows' columns (keeps symmetry). Ghosts with a pressure unknown are the remote columns.
   void assemble(const Real dt) {
-    const std::size_t n = p.size();
+    const std::size_t n = p.size(), n_own = p.n_owned();
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     row_of.resize(n);
     particle_of_row.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-      row_of[i] = has_row(roles[i]) ? static_cast<GlobalId>(particle_of_row.size()) : -1;
-      if (row_of[i] >= 0) particle_of_row.push_back(static_cast<LocalIndex>(i));
+    sys.row_id.clear();
+    sys.remote_id.clear();
+    sys.remote_rank.clear();
+    for (std::size_t i = 0; i < n_own; ++i) {
+      row_of[i] = has_row(roles[i]) ? static_cast<LocalIndex>(particle_of_row.size()) : -1;
+      if (row_of[i] >= 0) {
+        particle_of_row.push_back(static_cast<LocalIndex>(i));
+        sys.row_id.push_back(p.global_id[i]);
+      }
     }
     const std::size_t n_rows = particle_of_row.size();
-    sys.n_global_rows = n_rows;
+    for (std::size_t j = n_own; j < n; ++j) {
+      row_of[j] = has_row(roles[j]) ? static_cast<LocalIndex>(n_rows + sys.remote_id.size()) : -1;
+      if (row_of[j] >= 0) {
+        sys.remote_id.push_back(p.global_id[j]);
+        sys.remote_rank.push_back(dist.ghost_owner(j - n_own));
+      }
+    }
     // ||r||_2 <= eta rho / dt^2 sqrt(n_rows): RMS over the rows of r dt^2 / rho below eta.
-    sys.absolute_tolerance = density_tolerance * rho / (dt * dt) * std::sqrt(static_cast<Real>(n_rows));
-    sys.rows = solver->owned_rows(n_rows);
-    sys.row_ptr.resize(sys.rows.size() + 1);
-    sys.rhs.resize(sys.rows.size());
+    unsigned long long n_rows_global = n_rows;
+    MPI_Allreduce(MPI_IN_PLACE, &n_rows_global, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
+    sys.absolute_tolerance = density_tolerance * rho / (dt * dt) * std::sqrt(static_cast<Real>(n_rows_global));
+    sys.row_ptr.resize(n_rows + 1);
+    sys.rhs.resize(n_rows);
     // Upper bound of the entries: each row's neighbours plus its diagonal; trimmed at the end.
     std::size_t max_entries = 0;
-    for (std::size_t r = sys.rows.begin; r < sys.rows.end; ++r)
-      max_entries += nl.count(static_cast<std::size_t>(particle_of_row[r])) + 1;
+    for (std::size_t r = 0; r < n_rows; ++r) max_entries += nl.count(static_cast<std::size_t>(particle_of_row[r])) + 1;
     sys.col.resize(max_entries);
     sys.value.resize(max_entries);
     std::size_t m = 0;  // entries written
@@ -258,26 +280,27 @@ struct FluidSolver::Impl {
     const Real source = kappa * rho / (dt * dt) / lat_g.n0;
     const Real dirichlet_diag = a * lat_l.n0 + compress;
     const auto is_row = [&](const std::size_t j) { return has_row(roles[j]); };
-    for (std::size_t r = sys.rows.begin; r < sys.rows.end; ++r) {
+    for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      const std::size_t local = r - sys.rows.begin;
+      const auto me = static_cast<LocalIndex>(r);
       if (surface[i] != 0) {
-        sys.col[m] = static_cast<GlobalId>(r);
+        sys.col[m] = me;
         sys.value[m++] = dirichlet_diag;
-        sys.rhs[local] = 0;
-        sys.row_ptr[local + 1] = m;
+        sys.rhs[r] = 0;
+        sys.row_ptr[r + 1] = m;
         continue;
       }
       Real diag = compress;
       std::size_t diag_pos = std::numeric_limits<std::size_t>::max();
-      // Row i of eq. 12's Laplacian (pair weights a w_ij) over the neighbours with pressure rows.
+      // Row i of eq. 12's Laplacian (pair weights a w_ij) over the neighbours with pressure rows; the list is
+      // sorted by local index and row_of increases with it, so the columns come out sorted.
       for_each_pair(p.position, nl, re_l, i, is_row, [&](const std::size_t j, const Vec&, Real, const Real w) {
         const Real coef = a * w;
         diag += coef;
         if (surface[j] != 0) return;
         if (diag_pos == std::numeric_limits<std::size_t>::max() && j > i) {
           diag_pos = m;
-          sys.col[m] = static_cast<GlobalId>(r);
+          sys.col[m] = me;
           sys.value[m++] = 0;
         }
         sys.col[m] = row_of[j];
@@ -285,33 +308,35 @@ struct FluidSolver::Impl {
       });
       if (diag_pos == std::numeric_limits<std::size_t>::max()) {
         diag_pos = m;
-        sys.col[m] = static_cast<GlobalId>(r);
+        sys.col[m] = me;
         sys.value[m++] = 0;
       }
       sys.value[diag_pos] = diag;
-      sys.rhs[local] = source * (n_star[i] - lat_g.n0);
-      sys.row_ptr[local + 1] = m;
+      sys.rhs[r] = source * (n_star[i] - lat_g.n0);
+      sys.row_ptr[r + 1] = m;
     }
     sys.col.resize(m);
     sys.value.resize(m);
   }
 
-  /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient.
+  /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient; the
+  /// ghosts get their owners' pressure.
   PressureSolveResult solve_pressure() {
     auto& pressure = p.scalar_field(fluid_fields::pressure);
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n_rows = particle_of_row.size();
-    x_all.resize(n_rows);
+    x_own.resize(n_rows);
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      x_all[r] = surface[i] != 0 ? 0.0 : pressure[i];  // warm start
+      x_own[r] = surface[i] != 0 ? 0.0 : pressure[i];  // warm start
     }
-    const PressureSolveResult res = solver->solve(sys, x_all);
+    const PressureSolveResult res = solver->solve(sys, x_own);
     std::fill(pressure.begin(), pressure.end(), 0.0);
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      pressure[i] = surface[i] != 0 ? 0.0 : std::max(x_all[r], 0.0);
+      pressure[i] = surface[i] != 0 ? 0.0 : std::max(x_own[r], 0.0);
     }
+    dist.exchange_ghosts(p, {fluid_fields::pressure});
     return res;
   }
 
@@ -320,9 +345,9 @@ struct FluidSolver::Impl {
   void correct(const Real dt) {
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
-    const std::size_t n = p.size();
+    const std::size_t n = p.n_owned();
     const Real c_grad = dim / lat_g.n0;
-    dv.resize(n);
+    dv.resize(n);  // n: the owned particles
     const auto is_row = [&](const std::size_t j) { return has_row(roles[j]); };
     for (std::size_t i = 0; i < n; ++i) {
       dv[i].setZero();
@@ -345,8 +370,16 @@ struct FluidSolver::Impl {
     }
   }
 
-  /// Fluid particles outside the case's domain are removed.
+  /// Refreshes these fields at the ghosts from their owners.
+  void refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report) {
+    const auto t0 = Clock::now();
+    dist.exchange_ghosts(p, fields);
+    report.t_halo += seconds_since(t0);
+  }
+
+  /// Fluid particles outside the case's domain are removed (after the ghosts are dropped).
   std::size_t remove_escaped() {
+    p.drop_ghosts();
     const std::size_t n = p.size();
     remove.assign(n, 0);
     std::size_t n_out = 0;
@@ -360,6 +393,7 @@ struct FluidSolver::Impl {
   }
 
   ParticleSet& p;
+  Distribution& dist;
   FluidOptions opt;
   TankMotion motion;
   int rank = 0;
@@ -377,7 +411,6 @@ struct FluidSolver::Impl {
   Real density_tolerance = 0;  ///< fluid.density_tolerance: absolute stop, RMS of r dt^2 / rho
   std::string preconditioner;
   std::unique_ptr<PressureSolver> solver;
-  std::unordered_map<GlobalId, Vec> wall_reference;
   std::size_t n_steps = 0;
 
   // Work arrays, reused between steps.
@@ -386,13 +419,17 @@ struct FluidSolver::Impl {
   CellGrid grid;
   std::vector<Real> n_star;
   std::vector<Vec> v_new, dv;
-  std::vector<GlobalId> row_of;
+  std::vector<LocalIndex> row_of;  ///< local column id of each particle's pressure unknown, -1 if none
   std::vector<LocalIndex> particle_of_row;
   LocalRows sys;
   MPI_Comm comm = MPI_COMM_NULL;
-  std::vector<Real> x_all;
+  std::vector<Real> x_own;
   std::vector<std::uint8_t> remove;
 };
+
+Real fluid_interaction_radius(const FluidSetup& setup) {
+  return std::max(setup.parameters.re_gradient, setup.parameters.re_laplacian) * setup.dp;
+}
 
 Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu) {
   if (walls.gap <= 0) return 0;
@@ -402,8 +439,9 @@ Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu)
                               " (expected one of: " + join_names(lateral_wall_model_names()) + ")");
 }
 
-FluidSolver::FluidSolver(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options)
-    : impl_(std::make_unique<Impl>(setup, particles, comm, options)) {
+FluidSolver::FluidSolver(const FluidSetup& setup, ParticleSet& particles, Distribution& distribution,
+                         const FluidOptions& options)
+    : impl_(std::make_unique<Impl>(setup, particles, distribution, options)) {
   impl_->domain = setup.domain;
 }
 
@@ -413,9 +451,10 @@ Real FluidSolver::stable_dt(std::string* limit) const {
   const Impl& m = *impl_;
   if (m.time.dt) return fluid_stable_dt(m.time, m.dp, m.nu, 0, 0, m.opt.viscous_number, limit);
   Real v_max = 0;
-  for (std::size_t i = 0; i < m.p.size(); ++i)
+  for (std::size_t i = 0; i < m.p.n_owned(); ++i)
     if (m.p.kind[i] == ParticleKind::fluid || (m.motion.moving() && m.p.kind[i] == ParticleKind::wall))
       v_max = std::max(v_max, m.p.velocity[i].squaredNorm());
+  MPI_Allreduce(MPI_IN_PLACE, &v_max, 1, MPI_DOUBLE, MPI_MAX, m.comm);
   return fluid_stable_dt(m.time, m.dp, m.nu, m.gravity.norm(), std::sqrt(v_max), m.opt.viscous_number, limit);
 }
 
@@ -453,9 +492,15 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.dt = dt;
   auto t0 = Clock::now();
   const auto t_begin = t0;
+  // Owners for the positions the last step left, cell order now and then, ghosts within the halo.
+  m.p.drop_ghosts();
+  m.dist.migrate(m.p);
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
   if (m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0)
     m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
+  m.dist.build_ghosts(m.p);
+  report.t_halo += seconds_since(t0);
+  t0 = Clock::now();
   m.classify();
   m.move_walls(t + dt);
   report.t_rest += seconds_since(t0);
@@ -467,13 +512,18 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   t0 = Clock::now();
   m.predict(dt);
   report.t_rest += seconds_since(t0);
+  m.refresh_ghosts({"position", "velocity"}, report);
   t0 = Clock::now();
   m.build_near_list();
   report.t_neighbours += seconds_since(t0);
   t0 = Clock::now();
   m.collide(dt);
+  report.t_rest += seconds_since(t0);
+  m.refresh_ghosts({"position", "velocity"}, report);
+  t0 = Clock::now();
   m.density_and_surface();
   report.t_rest += seconds_since(t0);
+  m.refresh_ghosts({fluid_fields::free_surface}, report);
 
   t0 = Clock::now();
   m.assemble(dt);
@@ -496,7 +546,6 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_solve = res.t_solve;
   report.iterations = res.iterations;
   report.residual = res.residual;
-  report.n_rows = m.particle_of_row.size();
   if (!res.converged)
     throw std::runtime_error(fmt::format(
         "the pressure solve did not converge: {} iterations, true relative residual {:.3e} > tolerance {:.1e} "
@@ -506,14 +555,20 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   t0 = Clock::now();
   m.correct(dt);
   const auto& surface = m.p.scalar_field(fluid_fields::free_surface);
-  for (std::size_t i = 0; i < m.p.size(); ++i) report.n_surface += surface[i] != 0;
-  report.n_removed = m.remove_escaped();
-  for (std::size_t i = 0; i < m.p.size(); ++i)
+  // Sums over the ranks: surface particles, rows, removed particles; the largest fluid speed.
+  unsigned long long counts[3] = {0, m.particle_of_row.size(), 0};
+  for (std::size_t i = 0; i < m.p.n_owned(); ++i) counts[0] += surface[i] != 0;
+  counts[2] = m.remove_escaped();
+  for (std::size_t i = 0; i < m.p.n_owned(); ++i)
     if (m.p.kind[i] == ParticleKind::fluid) report.max_speed = std::max(report.max_speed, m.p.velocity[i].norm());
+  MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_UNSIGNED_LONG_LONG, MPI_SUM, m.comm);
+  MPI_Allreduce(MPI_IN_PLACE, &report.max_speed, 1, MPI_DOUBLE, MPI_MAX, m.comm);
+  report.n_surface = counts[0];
+  report.n_rows = counts[1];
+  report.n_removed = counts[2];
   ++m.n_steps;
-  report.t_rest += seconds_since(t0);
   const double total = seconds_since(t_begin);
-  report.t_rest = total - report.t_neighbours - report.t_assembly - report.t_setup - report.t_solve;
+  report.t_rest = total - report.t_neighbours - report.t_assembly - report.t_setup - report.t_solve - report.t_halo;
   return report;
 }
 
@@ -539,11 +594,11 @@ bool FluidSolver::load_state(BinaryReader& in) {
 std::size_t FluidSolver::memory_bytes() const {
   const Impl& m = *impl_;
   std::size_t bytes = m.nl.memory_bytes() + m.near.memory_bytes();
-  bytes += m.sys.col.capacity() * sizeof(GlobalId) + m.sys.value.capacity() * sizeof(Real) +
+  bytes += m.sys.col.capacity() * sizeof(LocalIndex) + m.sys.value.capacity() * sizeof(Real) +
            m.sys.row_ptr.capacity() * sizeof(std::size_t) + m.sys.rhs.capacity() * sizeof(Real);
   bytes += m.n_star.capacity() * sizeof(Real) + (m.v_new.capacity() + m.dv.capacity()) * sizeof(Vec) +
-           m.row_of.capacity() * sizeof(GlobalId) + m.particle_of_row.capacity() * sizeof(LocalIndex) +
-           m.x_all.capacity() * sizeof(Real) + m.roles.capacity();
+           m.row_of.capacity() * sizeof(LocalIndex) + m.particle_of_row.capacity() * sizeof(LocalIndex) +
+           m.x_own.capacity() * sizeof(Real) + m.roles.capacity();
   bytes += m.solver->memory_bytes();
   return bytes;
 }

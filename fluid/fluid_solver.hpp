@@ -17,6 +17,8 @@
 
 namespace mpsfsi {
 
+class Distribution;
+
 /// What one fluid step did, for the log and the benchmarks.
 struct FluidStepReport {
   Real dt = 0;
@@ -28,6 +30,7 @@ struct FluidStepReport {
   std::size_t n_removed = 0;   ///< fluid particles removed this step because they left the domain
   // Wall time of the phases [s].
   double t_neighbours = 0, t_assembly = 0, t_setup = 0, t_solve = 0, t_rest = 0;
+  double t_halo = 0;  ///< owners, ghosts and their refreshes (core/distribution.hpp)
 };
 
 /// The decay rate k [1/s] of the velocity relative to the tank that fluid.lateral_walls gives a fluid of
@@ -54,6 +57,10 @@ struct FluidOptions {
   std::string density_offset_field;
 };
 
+/// The largest interaction radius of the fluid [m] (the neighbour search's): the distribution's halo
+/// must reach at least this far, plus the distance particles move in a step.
+Real fluid_interaction_radius(const FluidSetup& setup);
+
 /// Largest admissible fluid dt: time.dt when fixed, else the smallest of time.dt_max, the CFL limit of
 /// eq. 52 for the largest speed v_max, the same limit for a particle that starts at rest under the
 /// acceleration |g| (sqrt(C dp / |g|)) and the viscous limit viscous_number dp^2 / nu. `limit`, if given,
@@ -63,10 +70,11 @@ Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, 
 
 class FluidSolver {
  public:
-  /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`. All ranks of `comm`
-  /// construct it and call every member together. io/ builds `setup` from a case (fluid_setup). Throws
+  /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`, which hold this rank's
+  /// particles as `distribution` places them. All ranks construct it and call every member together. io/ builds `setup` from a case (fluid_setup). Throws
   /// std::invalid_argument when the setup does not fit the particles (e.g. two fluid materials).
-  FluidSolver(const FluidSetup& setup, ParticleSet& particles, MPI_Comm comm, const FluidOptions& options = {});
+  FluidSolver(const FluidSetup& setup, ParticleSet& particles, Distribution& distribution,
+              const FluidOptions& options = {});
   ~FluidSolver();
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;

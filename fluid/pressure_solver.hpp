@@ -1,7 +1,7 @@
 // The distributed linear solve of the pressure Poisson equation (seed 004 eq. 23) behind a small
-// interface without Trilinos types. Every rank holds all particles; the rows of the matrix are split
-// into contiguous blocks, one per rank, each rank assembles its block as CRS arrays with global column
-// ids, and the solution comes back on every rank. The only implementation
+// interface without Trilinos types. Each rank passes its rows (its particles' pressures, named by their
+// global ids) with local column ids that reach other ranks' rows through a list of remote ids, and gets
+// the solution of its rows back. The only implementation
 // (fluid/pressure_solver_trilinos.cpp) uses Tpetra + Belos with MueLu or Ifpack2.
 #pragma once
 
@@ -46,25 +46,28 @@ struct PressureSolverSettings {
   std::map<std::string, std::string> parameters;
 };
 
-/// The rows [begin, end) of a system with n_rows rows that this rank owns.
-struct RowRange {
-  std::size_t begin = 0;
-  std::size_t end = 0;
-  std::size_t size() const { return end - begin; }
-};
-
-/// This rank's rows of the system, in CRS form with global column ids sorted within each row.
+/// This rank's rows of the system in CRS form. Rows and columns are named by global ids (a particle's
+/// global id for its pressure unknown); the rows of all ranks together are the unknowns, each on one rank.
+/// Column ids are local: c < row_id.size() is this rank's row c, c >= row_id.size() is the other rank's
+/// row remote_id[c - row_id.size()] (owned by rank remote_rank[...]); sorted within each row.
 struct LocalRows {
-  std::size_t n_global_rows = 0;
-  RowRange rows;
-  std::vector<std::size_t> row_ptr;   ///< size rows.size() + 1
-  std::vector<GlobalId> col;          ///< global column (row) ids
+  std::vector<GlobalId> row_id;
+  std::vector<GlobalId> remote_id;
+  std::vector<int> remote_rank;
+  std::vector<std::size_t> row_ptr;   ///< size row_id.size() + 1
+  std::vector<LocalIndex> col;
   std::vector<Real> value;
-  std::vector<Real> rhs;              ///< size rows.size()
+  std::vector<Real> rhs;              ///< size row_id.size()
   /// The solve may also stop when ||b - Ax||_2 (over all ranks) is at most this, whatever the relative
   /// tolerance says (0: off). The fluid sets it from fluid.density_tolerance.
   Real absolute_tolerance = 0;
+
+  std::size_t n_rows() const { return row_id.size(); }
 };
+
+/// Rank `rank`'s block of a system held whole (no remote columns) when its rows are split into
+/// `n_ranks` contiguous blocks (the first n % n_ranks blocks one row longer). Tests and benchmarks.
+LocalRows split_system(const LocalRows& whole, int rank, int n_ranks);
 
 struct PressureSolveResult {
   int iterations = 0;
@@ -79,10 +82,8 @@ struct PressureSolveResult {
 class PressureSolver {
  public:
   virtual ~PressureSolver() = default;
-  /// The rows this rank assembles for a system of n_rows rows (the same split on every call).
-  virtual RowRange owned_rows(std::size_t n_rows) const = 0;
-  /// Solve A x = b. `x` has n_global_rows entries on every rank: in, the initial guess; out, the
-  /// solution (identical on every rank). Collective over the communicator.
+  /// Solve A x = b. `x` has one entry per row of this rank: in, the initial guess; out, the solution.
+  /// Collective over the communicator.
   virtual PressureSolveResult solve(const LocalRows& system, std::vector<Real>& x) = 0;
   /// Bytes held by the matrix and the preconditioner on this rank (estimate).
   virtual std::size_t memory_bytes() const = 0;

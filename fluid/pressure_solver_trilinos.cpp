@@ -1,12 +1,13 @@
 // Trilinos implementation of the pressure solve (seed 004 eq. 23): the only translation unit that
-// includes Tpetra, Belos, MueLu and Ifpack2. The rank's block of rows is turned into a Tpetra::CrsMatrix
-// straight from local CRS arrays (Kokkos views + expertStaticFillComplete, no insertGlobalValues; the
-// column map and Import are kept while the set of referenced columns does not change); Belos CG or GMRES
-// with MueLu (coarse solver RELAXATION: the default KLU2 coarse solve is wrong on 2 ranks in this build,
-// see shared/notes/trilinos-on-debian.md) or Ifpack2 Chebyshev / ILU(0) (additive Schwarz) / Jacobi /
-// symmetric Gauss-Seidel. A preconditioner may be kept for several solves (rebuild_every): it is applied
-// as built on its own, earlier matrix, which stays a valid SPD preconditioner of the new one. The true
-// residual is checked after every solve and the solution is gathered to every rank.
+// includes Tpetra, Belos, MueLu and Ifpack2. The row map is made of this rank's row ids (particle global
+// ids) and the column map of these and the remote ids, with an Import from the owners the caller names;
+// both are kept while the ids do not change. SSOR / SGS run CG on Eisenstat's split system (no Tpetra
+// matrix); the other preconditioners get a Tpetra::CrsMatrix made straight from the local CRS arrays
+// (Kokkos views + expertStaticFillComplete): Belos CG or GMRES with MueLu (coarse solver RELAXATION: the
+// default KLU2 coarse solve is wrong on 2 ranks in this build, see shared/notes/trilinos-on-debian.md) or
+// Ifpack2 Chebyshev / ILU(0) (additive Schwarz) / Jacobi / symmetric Gauss-Seidel. A preconditioner may be
+// kept for several solves (rebuild_every): it is applied as built on its own, earlier matrix, which stays
+// a valid SPD preconditioner of the new one. The true residual is checked after every solve.
 #include "fluid/pressure_solver.hpp"
 
 #include "core/binary_io.hpp"
@@ -144,12 +145,10 @@ class EisenstatSystem final : public OP {
     return lower.bytes() + upper_rev.bytes() + other.bytes() + 6 * diag.capacity() * sizeof(Scalar);
   }
 
-  /// Splits this rank's rows (global columns; `local_column` maps a column of another rank's row to its
-  /// column-map id) and sets up the relaxation. Throws if a row has no positive diagonal.
-  template <class LocalColumn>
-  void set_rows(const LocalRows& sys, const Scalar omega, LocalColumn&& local_column) {
-    const std::size_t n = sys.rows.size();
-    const auto first = static_cast<GO>(sys.rows.begin), last = static_cast<GO>(sys.rows.end);
+  /// Splits this rank's rows and sets up the relaxation. Throws if a row has no positive diagonal.
+  void set_rows(const LocalRows& sys, const Scalar omega) {
+    const std::size_t n = sys.n_rows();
+    const auto n_own = static_cast<LocalIndex>(n);
     lower.clear();
     upper_rev.clear();
     other.clear();
@@ -157,16 +156,16 @@ class EisenstatSystem final : public OP {
     std::vector<int>& upper_count = upper_rev.ptr;  // counts first, offsets after
     upper_count.assign(n + 1, 0);
     for (std::size_t i = 0; i < n; ++i) {
-      const GO me = first + static_cast<GO>(i);
+      const auto me = static_cast<LocalIndex>(i);
       for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k) {
-        const GO c = sys.col[k];
+        const LocalIndex c = sys.col[k];
         if (c == me) {
           diag[i] += sys.value[k];
-        } else if (c < first || c >= last) {
-          other.col.push_back(local_column(c));
+        } else if (c >= n_own) {
+          other.col.push_back(c);
           other.val.push_back(sys.value[k]);
         } else if (c < me) {
-          lower.col.push_back(static_cast<int>(c - first));
+          lower.col.push_back(c);
           lower.val.push_back(sys.value[k]);
         } else {
           ++upper_count[n - i];
@@ -175,20 +174,20 @@ class EisenstatSystem final : public OP {
       lower.ptr.push_back(static_cast<int>(lower.col.size()));
       other.ptr.push_back(static_cast<int>(other.col.size()));
       if (!(diag[i] > 0))
-        throw std::runtime_error("pressure solve (sgs): row " + std::to_string(sys.rows.begin + i) +
+        throw std::runtime_error("pressure solve (sgs): the row of global id " + std::to_string(sys.row_id[i]) +
                                  " has no positive diagonal");
     }
     for (std::size_t r = 0; r < n; ++r) upper_count[r + 1] += upper_count[r];
     upper_rev.col.resize(static_cast<std::size_t>(upper_count[n]));
     upper_rev.val.resize(upper_rev.col.size());
     for (std::size_t i = 0; i < n; ++i) {
-      const GO me = first + static_cast<GO>(i);
-      int out = upper_rev.ptr[n - 1 - i];
+      const auto me = static_cast<LocalIndex>(i);
+      auto out = static_cast<std::size_t>(upper_rev.ptr[n - 1 - i]);
       for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k) {
-        const GO c = sys.col[k];
-        if (c > me && c < last) {
-          upper_rev.col[static_cast<std::size_t>(out)] = static_cast<int>(c - first);
-          upper_rev.val[static_cast<std::size_t>(out++)] = sys.value[k];
+        const LocalIndex c = sys.col[k];
+        if (c > me && c < n_own) {
+          upper_rev.col[out] = c;
+          upper_rev.val[out++] = sys.value[k];
         }
       }
     }
@@ -339,15 +338,6 @@ class TrilinosPressureSolver final : public PressureSolver {
     MPI_Comm_free(&raw_comm_);
   }
 
-  RowRange owned_rows(const std::size_t n) const override {
-    const std::size_t size = static_cast<std::size_t>(n_ranks_), r = static_cast<std::size_t>(rank_);
-    const std::size_t base = n / size, rem = n % size;
-    RowRange range;
-    range.begin = r * base + std::min(r, rem);
-    range.end = range.begin + base + (r < rem ? 1 : 0);
-    return range;
-  }
-
   std::size_t memory_bytes() const override {
     std::size_t bytes = 0;
     if (!A_.is_null()) bytes += A_->getNodeNumEntries() * (sizeof(Scalar) + sizeof(LO)) + (A_->getNodeNumRows() + 1) * sizeof(std::size_t);
@@ -371,9 +361,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     out.boolean(kept);
     out.boolean(saved);
     if (!saved) return;
-    out.u64(setup_sys_.n_global_rows);
-    out.u64(setup_sys_.rows.begin);
-    out.u64(setup_sys_.rows.end);
+    out.array(setup_sys_.row_id);
     out.array(setup_sys_.row_ptr);
     out.array(setup_sys_.col);
     out.array(setup_sys_.value);
@@ -392,17 +380,14 @@ class TrilinosPressureSolver final : public PressureSolver {
     const bool saved = in.boolean("the setup-matrix flag");
     LocalRows s;
     if (saved) {
-      s.n_global_rows = in.u64("the setup matrix size");
-      s.rows.begin = in.u64("the setup matrix rows");
-      s.rows.end = in.u64("the setup matrix rows");
+      s.row_id = in.array<GlobalId>("the setup matrix rows");
       s.row_ptr = in.array<std::size_t>("the setup matrix rows");
-      s.col = in.array<GlobalId>("the setup matrix columns");
+      s.col = in.array<LocalIndex>("the setup matrix columns");
       s.value = in.array<Real>("the setup matrix values", s.col.size());
-      if (s.rows.end < s.rows.begin || s.rows.end > s.n_global_rows || s.row_ptr.size() != s.rows.size() + 1 ||
-          s.row_ptr.back() != s.col.size())
+      if (s.row_ptr.size() != s.n_rows() + 1 || s.row_ptr.back() != s.col.size())
         in.fail("the pressure solver's setup matrix is inconsistent");
-      for (const GlobalId c : s.col)
-        if (c < 0 || static_cast<std::size_t>(c) >= s.n_global_rows) in.fail("the pressure solver's setup matrix is inconsistent");
+      for (const LocalIndex c : s.col)
+        if (c < 0 || static_cast<std::size_t>(c) >= s.n_rows()) in.fail("the pressure solver's setup matrix is inconsistent");
     }
     restore_pending_ = false;
     map_rows_ = rows;
@@ -436,15 +421,13 @@ class TrilinosPressureSolver final : public PressureSolver {
       setup_eisenstat(sys);
     else
       build_matrix(sys);
-    if (n_ranks_ > 1)  // the column ids of this system are no longer needed
-      for (const GO g : col_gids_) local_of_global_[static_cast<std::size_t>(g)] = -1;
     // Right-hand side and warm start.
     {
       auto b = b_->getLocalViewHost(Tpetra::Access::OverwriteAll);
       auto xv = x_->getLocalViewHost(Tpetra::Access::OverwriteAll);
-      for (std::size_t k = 0; k < sys.rows.size(); ++k) {
+      for (std::size_t k = 0; k < sys.n_rows(); ++k) {
         b(k, 0) = sys.rhs[k];
-        xv(k, 0) = x[sys.rows.begin + k];
+        xv(k, 0) = x[k];
       }
     }
     result.t_matrix = seconds_since(t0);
@@ -500,7 +483,7 @@ class TrilinosPressureSolver final : public PressureSolver {
                              const Belos::ReturnType ret, const Clock::time_point t0) {
     result.converged = ret == Belos::Converged && std::isfinite(result.residual) &&
                        result.residual <= 10 * result.tolerance;
-    gather(sys, x);
+    copy_solution(sys, x);
     result.t_solve = seconds_since(t0);
     ++n_solves_;
     return result;
@@ -512,7 +495,7 @@ class TrilinosPressureSolver final : public PressureSolver {
   PressureSolveResult solve_eisenstat(const LocalRows& sys, std::vector<Real>& x, PressureSolveResult& result,
                                       const Scalar bnorm, Clock::time_point t0) {
     EisenstatSystem& E = *eis_;
-    const std::size_t n = sys.rows.size();
+    const std::size_t n = sys.n_rows();
     {
       auto b = b_->getLocalViewHost(Tpetra::Access::ReadOnly);
       auto x0 = x_->getLocalViewHost(Tpetra::Access::ReadOnly);
@@ -581,56 +564,48 @@ class TrilinosPressureSolver final : public PressureSolver {
       E.t_row = rcp(new MV(row_map_, 1));
       E.t_col = rcp(new MV(col_map_, 1));
     }
-    E.set_rows(sys, omega_, [&](const GO c) { return local_of_global_[static_cast<std::size_t>(c)]; });
+    E.set_rows(sys, omega_);
     precond_bytes_ = E.bytes();
   }
 
-  /// Row map and vectors for this row count, and on several ranks the column map and Import of this
-  /// system's columns (local_of_global_ holds their column-map ids until the solve reset them).
+  /// Row map (this rank's row ids) and vectors, column map (the row ids, then the remote ids) and Import,
+  /// each made anew only when it changed on some rank.
   void update_maps(const LocalRows& sys) {
-    const std::size_t n_own = sys.rows.size();
-    // Chebyshev's bound belongs to a matrix of the old row count (map_rows_ survives a restart, the map not).
-    if (map_rows_ != sys.n_global_rows) lambda_max_ = 0;
-    map_rows_ = sys.n_global_rows;
-    if (row_map_.is_null() || row_map_->getGlobalNumElements() != sys.n_global_rows) {
-      row_map_ = rcp(new Map(static_cast<Tpetra::global_size_t>(sys.n_global_rows), n_own, 0, comm_));
+    int changed[2] = {row_map_.is_null() || sys.row_id != row_ids_ ? 1 : 0,
+                      sys.remote_id != remote_ids_ ? 1 : 0};
+    if (n_ranks_ > 1) MPI_Allreduce(MPI_IN_PLACE, changed, 2, MPI_INT, MPI_MAX, raw_comm_);
+    if (changed[0]) {
+      row_ids_ = sys.row_id;
+      row_map_ = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                             Teuchos::ArrayView<const GO>(row_ids_.data(), static_cast<int>(row_ids_.size())), 0, comm_));
+      // Chebyshev's bound and the kept preconditioners belong to the old unknowns.
+      if (map_rows_ != row_map_->getGlobalNumElements()) lambda_max_ = 0;
+      map_rows_ = row_map_->getGlobalNumElements();
       x_ = rcp(new MV(row_map_, 1));
       b_ = rcp(new MV(row_map_, 1));
       r_ = rcp(new MV(row_map_, 1));
-      muelu_ = Teuchos::null;  // the preconditioner belongs to the old map
+      muelu_ = Teuchos::null;
       ifpack_ = Teuchos::null;
-      col_map_ = Teuchos::null;
-      importer_ = Teuchos::null;
-      local_of_global_.assign(sys.n_global_rows, -1);
     }
-    if (n_ranks_ == 1) return;
-    // Column map: the sorted set of global ids referenced by this rank's rows (sorted, so each row's
-    // local column ids stay sorted).
-    col_gids_.clear();
-    for (const GO g : sys.col)
-      if (local_of_global_[static_cast<std::size_t>(g)] < 0) {
-        local_of_global_[static_cast<std::size_t>(g)] = 0;
-        col_gids_.push_back(g);
-      }
-    std::sort(col_gids_.begin(), col_gids_.end());
-    for (std::size_t k = 0; k < col_gids_.size(); ++k)
-      local_of_global_[static_cast<std::size_t>(col_gids_[k])] = static_cast<LO>(k);
-    // A new column map (and Import) only if the set of columns changed on some rank.
-    int changed = col_map_.is_null() || col_gids_ != old_col_gids_ ? 1 : 0;
-    MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_MAX, raw_comm_);
-    if (changed) {
+    if (n_ranks_ == 1) {
+      col_map_ = row_map_;
+      importer_ = Teuchos::null;
+      return;
+    }
+    if (changed[0] || changed[1]) {
+      remote_ids_ = sys.remote_id;
+      col_ids_ = row_ids_;
+      col_ids_.insert(col_ids_.end(), remote_ids_.begin(), remote_ids_.end());
       col_map_ = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
-                             Teuchos::ArrayView<const GO>(col_gids_.data(), static_cast<int>(col_gids_.size())), 0,
-                             comm_));
-      importer_ = rcp(new Tpetra::Import<LO, GO, Node>(row_map_, col_map_));
-      old_col_gids_ = col_gids_;
+                             Teuchos::ArrayView<const GO>(col_ids_.data(), static_cast<int>(col_ids_.size())), 0, comm_));
+      Teuchos::Array<int> remote_pids(sys.remote_rank.begin(), sys.remote_rank.end());
+      importer_ = rcp(new Tpetra::Import<LO, GO, Node>(row_map_, col_map_, remote_pids));
     }
   }
 
   /// The Tpetra matrix of this rank's rows, from the CRS arrays (after update_maps).
   void build_matrix(const LocalRows& sys) {
-    const std::size_t n_own = sys.rows.size();
-    const RCP<const Map> col_map = n_ranks_ > 1 ? col_map_ : row_map_;
+    const std::size_t n_own = sys.n_rows();
     const std::size_t nnz = sys.col.size();
     using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
     using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
@@ -639,14 +614,10 @@ class TrilinosPressureSolver final : public PressureSolver {
     Entries ind(Kokkos::ViewAllocateWithoutInitializing("ind"), nnz);
     Values val(Kokkos::ViewAllocateWithoutInitializing("val"), nnz);
     for (std::size_t k = 0; k <= n_own; ++k) ptr(k) = sys.row_ptr[k];
-    if (n_ranks_ > 1) {
-      for (std::size_t k = 0; k < nnz; ++k) ind(k) = local_of_global_[static_cast<std::size_t>(sys.col[k])];
-    } else {
-      for (std::size_t k = 0; k < nnz; ++k) ind(k) = static_cast<LO>(sys.col[k]);
-    }
+    for (std::size_t k = 0; k < nnz; ++k) ind(k) = sys.col[k];
     for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
     A_ = Teuchos::null;  // release the old arrays first
-    A_ = rcp(new Matrix(row_map_, col_map, ptr, ind, val));
+    A_ = rcp(new Matrix(row_map_, col_map_, ptr, ind, val));
     A_->expertStaticFillComplete(row_map_, row_map_, importer_);
   }
 
@@ -660,12 +631,12 @@ class TrilinosPressureSolver final : public PressureSolver {
     using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
     using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
     using Values = Matrix::local_matrix_device_type::values_type;
-    const std::size_t n = sys.rows.size(), nnz = sys.col.size();
+    const std::size_t n = sys.n_rows(), nnz = sys.col.size();
     RowPtr ptr(Kokkos::ViewAllocateWithoutInitializing("ptr"), n + 1);
     Entries ind(Kokkos::ViewAllocateWithoutInitializing("ind"), nnz);
     Values val(Kokkos::ViewAllocateWithoutInitializing("val"), nnz);
     for (std::size_t k = 0; k <= n; ++k) ptr(k) = sys.row_ptr[k];
-    for (std::size_t k = 0; k < nnz; ++k) ind(k) = static_cast<LO>(sys.col[k]);
+    for (std::size_t k = 0; k < nnz; ++k) ind(k) = sys.col[k];
     for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
     auto A = rcp(new Matrix(row_map_, row_map_, ptr, ind, val));
     A->expertStaticFillComplete(row_map_, row_map_);
@@ -697,7 +668,7 @@ class TrilinosPressureSolver final : public PressureSolver {
     if (p == Preconditioner::none) return Teuchos::null;
     // A restart rebuilds the kept preconditioner unless the row count changed since its setup (the
     // original run dropped it then, as build_matrix does).
-    const bool restore = restore_pending_ && setup_sys_.n_global_rows == sys.n_global_rows;
+    const bool restore = restore_pending_ && setup_sys_.row_id == sys.row_id;
     restore_pending_ = false;
     // Chebyshev keeps only its eigenvalue bound (reset with the row map).
     const bool missing = p == Preconditioner::muelu ? muelu_.is_null() : p == Preconditioner::chebyshev ? !(lambda_max_ > 0) : ifpack_.is_null();
@@ -765,26 +736,10 @@ class TrilinosPressureSolver final : public PressureSolver {
     force_setup_ = false;
   }
 
-  void gather(const LocalRows& sys, std::vector<Real>& x) {
+  void copy_solution(const LocalRows& sys, std::vector<Real>& x) const {
     auto xv = x_->getLocalViewHost(Tpetra::Access::ReadOnly);
-    const std::size_t n_own = sys.rows.size();
-    if (n_ranks_ == 1) {
-      for (std::size_t k = 0; k < n_own; ++k) x[k] = xv(k, 0);
-      return;
-    }
-    counts_.resize(static_cast<std::size_t>(n_ranks_));
-    displs_.resize(static_cast<std::size_t>(n_ranks_));
-    for (int r = 0; r < n_ranks_; ++r) {
-      // owned_rows() of rank r
-      const std::size_t size = static_cast<std::size_t>(n_ranks_), rr = static_cast<std::size_t>(r);
-      const std::size_t n = sys.n_global_rows, base = n / size, rem = n % size;
-      displs_[rr] = static_cast<int>(rr * base + std::min(rr, rem));
-      counts_[rr] = static_cast<int>(base + (rr < rem ? 1 : 0));
-    }
-    send_.resize(n_own);
-    for (std::size_t k = 0; k < n_own; ++k) send_[k] = xv(k, 0);
-    MPI_Allgatherv(send_.data(), static_cast<int>(n_own), MPI_DOUBLE, x.data(), counts_.data(), displs_.data(),
-                   MPI_DOUBLE, raw_comm_);
+    x.resize(sys.n_rows());
+    for (std::size_t k = 0; k < sys.n_rows(); ++k) x[k] = xv(k, 0);
   }
 
   PressureSolverSettings settings_;
@@ -815,12 +770,8 @@ class TrilinosPressureSolver final : public PressureSolver {
   Teuchos::ParameterList prec_params_, belos_params_;
   RCP<const Map> col_map_;
   RCP<const Tpetra::Import<LO, GO, Node>> importer_;
-  std::vector<GO> old_col_gids_;
+  std::vector<GO> row_ids_, remote_ids_, col_ids_;  ///< the ids the maps were made of
   std::size_t precond_bytes_ = 0;
-  std::vector<LO> local_of_global_;
-  std::vector<GO> col_gids_;
-  std::vector<int> counts_, displs_;
-  std::vector<Real> send_;
 };
 
 }  // namespace

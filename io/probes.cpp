@@ -17,12 +17,13 @@ namespace mpsfsi {
 namespace {
 /// Largest coordinate `axis` of the fluid particles whose other coordinate is below `limit`,
 /// extended by half a particle to the fluid's outer edge.
-Real fluid_extent(const ParticleSet& p, const int axis, const Real limit, const Real dp) {
+/// (over this rank's owned particles; the largest over the ranks is the probe's value)
+Real fluid_extent(const ParticleSet& p, const int axis, const Real limit) {
   const int other = 1 - axis;
   Real m = -std::numeric_limits<Real>::max();
-  for (std::size_t i = 0; i < p.size(); ++i)
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
     if (p.kind[i] == ParticleKind::fluid && p.position[i][other] < limit) m = std::max(m, p.position[i][axis]);
-  return m + 0.5 * dp;
+  return m;
 }
 }  // namespace
 
@@ -59,8 +60,11 @@ ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, con
   out_ << "\n";
 }
 
-std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t) const {
-  std::vector<Real> values;
+std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t, MPI_Comm comm) const {
+  // Each probe's terms over this rank's owned particles: sums (kernel averages) and maxima (extents, the
+  // displacement of the one particle, -max elsewhere), reduced over the ranks below.
+  const Real lowest = -std::numeric_limits<Real>::max();
+  std::vector<Real> sums, maxima;
   const bool has_pressure = p.has_scalar_field(fluid_fields::pressure);
   for (const auto& probe : probes_) {
     switch (probe.spec.type) {
@@ -68,43 +72,69 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t) cons
         // Kernel-weighted average (re = 2.1 dp) of the fluid and wall pressures around the point.
         const Real re = 2.1 * dp_;
         Real sw = 0, swp = 0;
-        for (std::size_t i = 0; has_pressure && i < p.size(); ++i) {
+        for (std::size_t i = 0; has_pressure && i < p.n_owned(); ++i) {
           if (p.kind[i] != ParticleKind::fluid && p.kind[i] != ParticleKind::wall) continue;
           const Real w = weight((p.position[i] - probe.spec.position).norm(), re);
           sw += w;
           swp += w * p.scalar_field(fluid_fields::pressure)[i];
         }
-        values.push_back(sw > 0 ? swp / sw : 0.0);
+        sums.push_back(sw);
+        sums.push_back(swp);
         break;
       }
       case ProbeType::surge_front:  // largest x of the fluid within 2 dp of the floor (probe y)
-        values.push_back(fluid_extent(p, 0, probe.spec.position[1] + 2 * dp_, dp_));
+        maxima.push_back(fluid_extent(p, 0, probe.spec.position[1] + 2 * dp_));
         break;
       case ProbeType::column_height:  // largest y of the fluid within 2 dp of the back wall (probe x)
-        values.push_back(fluid_extent(p, 1, probe.spec.position[0] + 2 * dp_, dp_));
+        maxima.push_back(fluid_extent(p, 1, probe.spec.position[0] + 2 * dp_));
         break;
       case ProbeType::displacement: {
         // Global: x - x0. Tank frame (the tank at rest at t = 0): R(-theta)(x - pivot) - (x0 - pivot).
-        Vec d = Vec::Constant(std::numeric_limits<Real>::quiet_NaN());
+        Vec d = Vec::Constant(lowest);
         const bool tank_frame = probe.spec.frame == ProbeFrame::tank;
         const Real theta = tank_frame ? tank_.angle(t) : 0;
-        for (std::size_t i = 0; i < p.size(); ++i)
-          if (p.global_id[i] == probe.particle)
-            d = tank_frame ? Vec(tank_.to_tank_frame(p.position[i], theta) - (probe.initial - tank_.pivot()))
-                           : Vec(p.position[i] - probe.initial);
-        values.push_back(d[0]);
-        values.push_back(d[1]);
+        const LocalIndex i = p.local_index(probe.particle);
+        if (i >= 0 && static_cast<std::size_t>(i) < p.n_owned()) {
+          const Vec x = p.position[static_cast<std::size_t>(i)];
+          d = tank_frame ? Vec(tank_.to_tank_frame(x, theta) - (probe.initial - tank_.pivot())) : Vec(x - probe.initial);
+        }
+        maxima.push_back(d[0]);
+        maxima.push_back(d[1]);
         break;
       }
+    }
+  }
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  if (size > 1) {
+    MPI_Allreduce(MPI_IN_PLACE, sums.data(), static_cast<int>(sums.size()), MPI_DOUBLE, MPI_SUM, comm);
+    MPI_Allreduce(MPI_IN_PLACE, maxima.data(), static_cast<int>(maxima.size()), MPI_DOUBLE, MPI_MAX, comm);
+  }
+  std::vector<Real> values;
+  std::size_t ks = 0, km = 0;
+  for (const auto& probe : probes_) {
+    switch (probe.spec.type) {
+      case ProbeType::pressure:
+        values.push_back(sums[ks] > 0 ? sums[ks + 1] / sums[ks] : 0.0);
+        ks += 2;
+        break;
+      case ProbeType::surge_front:
+      case ProbeType::column_height:  // to the fluid's outer edge: half a particle further
+        values.push_back(maxima[km++] + 0.5 * dp_);
+        break;
+      case ProbeType::displacement:
+        for (int c = 0; c < 2; ++c, ++km)
+          values.push_back(maxima[km] == lowest ? std::numeric_limits<Real>::quiet_NaN() : maxima[km]);
+        break;
     }
   }
   return values;
 }
 
-void ProbeWriter::record(const Real t, const ParticleSet& particles) {
+void ProbeWriter::record(const Real t, const std::vector<Real>& values) {
   if (probes_.empty() || !out_.is_open()) return;
   out_ << fmt::format("{:.9g}", t);
-  for (const Real v : evaluate(particles, t)) out_ << fmt::format(",{:.9g}", v);
+  for (const Real v : values) out_ << fmt::format(",{:.9g}", v);
   out_ << "\n";
   out_.flush();
   check_written(out_, path_, "probe table");

@@ -7,6 +7,8 @@
 #include "core/tank_motion.hpp"
 #include "io/case.hpp"
 
+#include <mpi.h>
+
 #include <fstream>
 #include <string>
 #include <vector>
@@ -21,11 +23,12 @@ class ProbeWriter {
   /// `particles` (the initial state).
   ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path, bool append = false);
   bool empty() const { return probes_.empty(); }
-  /// Append one row at time t.
-  void record(Real t, const ParticleSet& particles);
+  /// Append one row at time t with these values (from evaluate()).
+  void record(Real t, const std::vector<Real>& values);
   /// Values of the probes at time t (the tank-frame probes need the tank angle theta(t)), in the order
-  /// of the case file (the columns after time).
-  std::vector<Real> evaluate(const ParticleSet& particles, Real t) const;
+  /// of the case file (the columns after time), from the owned particles of every rank of `comm` (a
+  /// collective).
+  std::vector<Real> evaluate(const ParticleSet& particles, Real t, MPI_Comm comm = MPI_COMM_SELF) const;
   /// Column names after "time" (a displacement probe has two: _dx and _dy).
   const std::vector<std::string>& columns() const { return columns_; }
 

@@ -149,28 +149,28 @@ void check_length(const std::vector<T>& a, const std::size_t n, const std::strin
   }
 }
 
-/// A named point array of `n` tuples of one component holding `values` converted to the array type.
+/// A named point array of `n` tuples of one component holding values[0, n) converted to the array type.
 template <class ArrayT, class T>
-vtkSmartPointer<ArrayT> make_scalar_array(const char* name, const std::vector<T>& values) {
+vtkSmartPointer<ArrayT> make_scalar_array(const char* name, const std::vector<T>& values, const std::size_t n) {
   auto array = vtkSmartPointer<ArrayT>::New();
   array->SetName(name);
   array->SetNumberOfComponents(1);
-  array->SetNumberOfTuples(static_cast<vtkIdType>(values.size()));
+  array->SetNumberOfTuples(static_cast<vtkIdType>(n));
   auto* out = array->GetPointer(0);
-  for (std::size_t i = 0; i < values.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     out[i] = static_cast<typename ArrayT::ValueType>(values[i]);
   }
   return array;
 }
 
-/// A 3-component double array from 2D (or 3D) vectors; missing components are 0.
-vtkSmartPointer<vtkDoubleArray> make_vector_array(const char* name, const std::vector<Vec>& values) {
+/// A 3-component double array from values[0, n), 2D (or 3D) vectors; missing components are 0.
+vtkSmartPointer<vtkDoubleArray> make_vector_array(const char* name, const std::vector<Vec>& values, const std::size_t n) {
   auto array = vtkSmartPointer<vtkDoubleArray>::New();
   if (name != nullptr) array->SetName(name);
   array->SetNumberOfComponents(3);
-  array->SetNumberOfTuples(static_cast<vtkIdType>(values.size()));
+  array->SetNumberOfTuples(static_cast<vtkIdType>(n));
   double* out = array->GetPointer(0);
-  for (std::size_t i = 0; i < values.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c) out[3 * i + static_cast<std::size_t>(c)] = c < dim ? values[i][c] : 0.0;
   }
   return array;
@@ -178,8 +178,11 @@ vtkSmartPointer<vtkDoubleArray> make_vector_array(const char* name, const std::v
 
 }  // namespace
 
-VtkSeriesWriter::VtkSeriesWriter(std::string directory, std::string basename)
-    : directory_(directory.empty() ? std::string(".") : std::move(directory)), basename_(std::move(basename)) {
+VtkSeriesWriter::VtkSeriesWriter(std::string directory, std::string basename, const int piece, const int n_pieces)
+    : directory_(directory.empty() ? std::string(".") : std::move(directory)), basename_(std::move(basename)),
+      piece_(piece), n_pieces_(n_pieces) {
+  if (n_pieces < 1 || piece < 0 || piece >= n_pieces)
+    throw std::invalid_argument(fmt::format("VTK output: piece {} of {} pieces", piece, n_pieces));
   if (basename_.empty() || basename_.find('/') != std::string::npos) {
     throw std::invalid_argument(
         fmt::format("VTK output: basename '{}' must be a non-empty file name without '/'", basename_));
@@ -198,24 +201,35 @@ void VtkSeriesWriter::set_fields(std::vector<std::string> fields) {
 }
 
 std::string VtkSeriesWriter::frame_file_name(const std::size_t frame) const {
-  return fmt::format("{}_{:06d}.vtu", basename_, frame);
+  return fmt::format("{}_{:06d}.{}", basename_, frame, n_pieces_ > 1 ? "pvtu" : "vtu");
+}
+
+std::string VtkSeriesWriter::piece_file_name(const std::size_t frame, const int piece) const {
+  return n_pieces_ > 1 ? fmt::format("{}_{:06d}_{}.vtu", basename_, frame, piece) : frame_file_name(frame);
 }
 
 std::string VtkSeriesWriter::write(const ParticleSet& particles, const double time) {
-  const std::string file_name = frame_file_name(next_frame_);
+  const std::string path = write_piece(particles, time);
+  commit_frame(time);
+  return path;
+}
+
+std::string VtkSeriesWriter::write_piece(const ParticleSet& particles, const double time) {
+  const std::string file_name = piece_file_name(next_frame_, piece_);
   const std::string path = (fs::path(directory_) / file_name).string();
   if (!std::isfinite(time)) {
     throw std::invalid_argument(fmt::format("VTK output '{}': time {} is not finite", path, time));
   }
 
-  // Check every array before touching the disk.
-  const std::size_t n = particles.size();
-  check_length(particles.velocity, n, "velocity");
-  check_length(particles.kind, n, "kind");
-  check_length(particles.body, n, "body");
-  check_length(particles.material, n, "material");
-  check_length(particles.clamped, n, "clamped");
-  check_length(particles.global_id, n, "global_id");
+  // Check every array before touching the disk; the owned particles are written (ghosts are another
+  // piece's).
+  const std::size_t n_all = particles.size(), n = particles.n_owned();
+  check_length(particles.velocity, n_all, "velocity");
+  check_length(particles.kind, n_all, "kind");
+  check_length(particles.body, n_all, "body");
+  check_length(particles.material, n_all, "material");
+  check_length(particles.clamped, n_all, "clamped");
+  check_length(particles.global_id, n_all, "global_id");
 
   std::vector<std::pair<std::string, const std::vector<Real>*>> scalars;
   std::vector<std::pair<std::string, const std::vector<Vec>*>> vectors;
@@ -243,19 +257,19 @@ std::string VtkSeriesWriter::write(const ParticleSet& particles, const double ti
     if (!used.insert(name).second) {
       throw std::invalid_argument(fmt::format("VTK output '{}': two point arrays named '{}'", path, name));
     }
-    check_length(*values, n, name);
+    check_length(*values, n_all, name);
   }
   for (const auto& [name, values] : vectors) {
     if (!used.insert(name).second) {
       throw std::invalid_argument(fmt::format("VTK output '{}': two point arrays named '{}'", path, name));
     }
-    check_length(*values, n, name);
+    check_length(*values, n_all, name);
   }
 
   // Grid: 3D points (z = 0 in 2D) and one vertex cell per particle.
   const auto nv = static_cast<vtkIdType>(n);
   vtkNew<vtkPoints> points;
-  points->SetData(make_vector_array(nullptr, particles.position));
+  points->SetData(make_vector_array(nullptr, particles.position, n));
   vtkNew<vtkIdTypeArray> offsets;
   offsets->SetNumberOfTuples(nv + 1);
   vtkNew<vtkIdTypeArray> connectivity;
@@ -272,14 +286,18 @@ std::string VtkSeriesWriter::write(const ParticleSet& particles, const double ti
   grid->SetCells(VTK_VERTEX, cells);
 
   vtkPointData* const pd = grid->GetPointData();
-  pd->AddArray(make_vector_array("velocity", particles.velocity));
-  pd->AddArray(make_scalar_array<vtkUnsignedCharArray>("kind", particles.kind));
-  pd->AddArray(make_scalar_array<vtkUnsignedShortArray>("body", particles.body));
-  pd->AddArray(make_scalar_array<vtkShortArray>("material", particles.material));
-  pd->AddArray(make_scalar_array<vtkUnsignedCharArray>("clamped", particles.clamped));
-  pd->AddArray(make_scalar_array<vtkLongLongArray>("global_id", particles.global_id));
-  for (const auto& [name, values] : scalars) pd->AddArray(make_scalar_array<vtkDoubleArray>(name.c_str(), *values));
-  for (const auto& [name, values] : vectors) pd->AddArray(make_vector_array(name.c_str(), *values));
+  pd->AddArray(make_vector_array("velocity", particles.velocity, n));
+  pd->AddArray(make_scalar_array<vtkUnsignedCharArray>("kind", particles.kind, n));
+  pd->AddArray(make_scalar_array<vtkUnsignedShortArray>("body", particles.body, n));
+  pd->AddArray(make_scalar_array<vtkShortArray>("material", particles.material, n));
+  pd->AddArray(make_scalar_array<vtkUnsignedCharArray>("clamped", particles.clamped, n));
+  pd->AddArray(make_scalar_array<vtkLongLongArray>("global_id", particles.global_id, n));
+  for (const auto& [name, values] : scalars) pd->AddArray(make_scalar_array<vtkDoubleArray>(name.c_str(), *values, n));
+  for (const auto& [name, values] : vectors) pd->AddArray(make_vector_array(name.c_str(), *values, n));
+  arrays_ = {{"velocity", "Float64", 3}, {"kind", "UInt8", 1},     {"body", "UInt16", 1},
+             {"material", "Int16", 1},   {"clamped", "UInt8", 1},  {"global_id", "Int64", 1}};
+  for (const auto& [name, values] : scalars) arrays_.emplace_back(name, "Float64", 1);
+  for (const auto& [name, values] : vectors) arrays_.emplace_back(name, "Float64", 3);
 
   vtkNew<vtkDoubleArray> time_value;
   time_value->SetName("TimeValue");
@@ -308,16 +326,41 @@ std::string VtkSeriesWriter::write(const ParticleSet& particles, const double ti
     throw OutputError(fmt::format("cannot write VTK frame '{}': {}", path, reason));
   }
   write_file_atomically(path, writer->GetOutputString(), "VTK frame");
+  return path;
+}
 
-  frames_.emplace_back(time, file_name);
-  try {
-    write_pvd();
-  } catch (...) {
-    frames_.pop_back();
-    throw;
+std::string VtkSeriesWriter::commit_frame(const double time) {
+  const std::string file_name = frame_file_name(next_frame_);
+  if (piece_ == 0) {
+    if (n_pieces_ > 1) {
+      // The parallel file: the pieces' array layout and their file names (relative to it).
+      std::string text =
+          "<?xml version=\"1.0\"?>\n"
+          "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+          "  <PUnstructuredGrid GhostLevel=\"0\">\n"
+          "    <PPointData>\n";
+      for (const auto& [name, type, components] : arrays_)
+        text += fmt::format("      <PDataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\"/>\n", type,
+                            xml_escape(name), components);
+      text += "    </PPointData>\n    <PPoints>\n      <PDataArray type=\"Float64\" NumberOfComponents=\"3\"/>\n"
+              "    </PPoints>\n";
+      for (int q = 0; q < n_pieces_; ++q)
+        text += fmt::format("    <Piece Source=\"{}\"/>\n", xml_escape(piece_file_name(next_frame_, q)));
+      text += "  </PUnstructuredGrid>\n</VTKFile>\n";
+      write_file_atomically((fs::path(directory_) / file_name).string(), text, "VTK frame");
+    }
+    frames_.emplace_back(time, file_name);
+    try {
+      write_pvd();
+    } catch (...) {
+      frames_.pop_back();
+      throw;
+    }
+  } else {
+    frames_.emplace_back(time, file_name);
   }
   ++next_frame_;
-  return path;
+  return (fs::path(directory_) / file_name).string();
 }
 
 void VtkSeriesWriter::write_pvd() const {
@@ -345,7 +388,7 @@ void VtkSeriesWriter::adopt_existing(const double up_to_time, const std::size_t 
   if (!fs::exists(pvd_path_, ec)) return;
 
   const std::string prefix = basename_ + "_";
-  const std::string suffix = ".vtu";
+  const std::string suffix = n_pieces_ > 1 ? ".pvtu" : ".vtu";
   for (auto& [time, file] : read_pvd(pvd_path_)) {
     if (!(time <= up_to_time)) continue;
     // Never reuse the number of an adopted frame's file for a new frame.

@@ -1,8 +1,10 @@
 // Benchmark of the fluid step (seed 004 eq. 16-24) on the dam break of cases/dam_break.yaml at l0 = 1.6 mm
-// (about 16,200 fluid particles): milliseconds per step split into neighbour search, PPE assembly,
-// preconditioner setup, solve (with iterations) and the rest, and peak memory per particle.
-// Usage: bench_fluid_dam_break [preconditioner [n_steps [dp [extra --set overrides...]]]]
+// (about 16,200 fluid particles), on the ranks of mpirun with the particles distributed: milliseconds per
+// step (the slowest rank) split into neighbour search, PPE assembly, preconditioner setup, solve (with
+// iterations), halo (owners, ghosts, refreshes) and the rest; peak memory per rank; ghosts and halo bytes.
+// Usage: [mpirun -np R] bench_fluid_dam_break [preconditioner [n_steps [dp [extra --set overrides...]]]]
 // Results go to docs/performance.md (## Fluid).
+#include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -19,6 +21,9 @@ using namespace mpsfsi;
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
   {
+    int rank = 0, n_ranks = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
     const std::string prec = argc > 1 ? argv[1] : "jacobi";
     const int n_steps = argc > 2 ? std::stoi(argv[2]) : 200;
     const std::string dp = argc > 3 ? argv[3] : "0.0016";
@@ -27,10 +32,17 @@ int main(int argc, char** argv) {
     const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/dam_break.yaml", overrides);
     Scene scene = build_scene(spec);
     ParticleSet& p = scene.particles;
-    FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_WORLD);
+    const std::size_t n_particles = p.size(), n_fluid = p.n_of_kind(ParticleKind::fluid);
+    DistributionSettings ds;
+    ds.halo_width = fluid_interaction_radius(fluid_setup(spec)) + spec.dp;
+    Distribution dist(MPI_COMM_WORLD, ds);
+    dist.distribute_replicated(p);
+    FluidSolver fluid(fluid_setup(spec), p, dist);
     FluidStepReport sum;
     long iterations = 0;
     Real t = 0;
+    std::size_t halo_bytes = 0, ghosts = 0;
+    MPI_Barrier(MPI_COMM_WORLD);
     const auto t0 = std::chrono::steady_clock::now();
     for (int s = 0; s < n_steps; ++s) {
       const Real dt = fluid.stable_dt();
@@ -40,21 +52,32 @@ int main(int argc, char** argv) {
       sum.t_assembly += r.t_assembly;
       sum.t_setup += r.t_setup;
       sum.t_solve += r.t_solve;
+      sum.t_halo += r.t_halo;
       sum.t_rest += r.t_rest;
       iterations += r.iterations;
+      halo_bytes += dist.stats().halo_bytes;
+      ghosts += dist.stats().n_ghosts;
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
-    const double peak = static_cast<double>(usage.ru_maxrss) * 1024.0;
+    // The slowest rank's phases, the largest peak memory; halo bytes and ghosts per rank and step (mean).
+    double phases[7] = {sum.t_neighbours, sum.t_assembly, sum.t_setup, sum.t_solve, sum.t_halo, sum.t_rest, wall};
+    MPI_Allreduce(MPI_IN_PLACE, phases, 7, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    long peak_kib = usage.ru_maxrss;
+    MPI_Allreduce(MPI_IN_PLACE, &peak_kib, 1, MPI_LONG, MPI_MAX, MPI_COMM_WORLD);
+    double halo[2] = {static_cast<double>(halo_bytes), static_cast<double>(ghosts)};
+    MPI_Allreduce(MPI_IN_PLACE, halo, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     const double ms = 1e3 / n_steps;
-    fmt::print("dam break dp {} m, {} particles ({} fluid), preconditioner {}, tolerance {:.0e}, {} steps to t = {:.4f} s\n",
-               dp, p.size(), p.n_of_kind(ParticleKind::fluid), prec, spec.fluid.tolerance, n_steps, t);
-    fmt::print("| particles | neighbours | assembly | prec. setup | solve (it) | rest | total ms/step | peak KB/particle | fluid arrays KB/particle |\n");
-    fmt::print("| {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} ({:.1f}) | {:.2f} | {:.2f} | {:.2f} | {:.2f} |\n", p.size(),
-               sum.t_neighbours * ms, sum.t_assembly * ms, sum.t_setup * ms, sum.t_solve * ms,
-               static_cast<double>(iterations) / n_steps, sum.t_rest * ms, wall * ms, peak / 1024.0 / static_cast<double>(p.size()),
-               static_cast<double>(fluid.memory_bytes() + p.memory_bytes()) / 1024.0 / static_cast<double>(p.size()));
+    if (rank == 0) {
+      fmt::print("dam break dp {} m, {} particles ({} fluid), {} rank(s), preconditioner {}, tolerance {:.0e}, {} steps to t = {:.4f} s\n",
+                 dp, n_particles, n_fluid, n_ranks, prec, spec.fluid.tolerance, n_steps, t);
+      fmt::print("| ranks | particles | neighbours | assembly | prec. setup | solve (it) | halo | rest | total ms/step | peak MiB/rank | ghosts/rank | halo KiB/rank/step |\n");
+      fmt::print("| {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} ({:.1f}) | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.0f} | {:.1f} |\n", n_ranks,
+                 n_particles, phases[0] * ms, phases[1] * ms, phases[2] * ms, phases[3] * ms,
+                 static_cast<double>(iterations) / n_steps, phases[4] * ms, phases[5] * ms, phases[6] * ms,
+                 static_cast<double>(peak_kib) / 1024.0, halo[1] / n_steps / n_ranks, halo[0] / n_steps / n_ranks / 1024.0);
+    }
   }
   MPI_Finalize();
   return 0;

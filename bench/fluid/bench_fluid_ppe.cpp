@@ -11,6 +11,7 @@
 //   the preconditioner (PressureSolverSettings::parameters, MueLu / Ifpack2 names; ' ' may be written '_').
 // Example: bench_fluid_ppe 100 0.0016 jac:jacobi sgs:sgs mu5:muelu:rebuild_every=5
 // Results go to docs/performance.md (## Fluid, ### Pressure solve).
+#include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "fluid/pressure_solver.hpp"
 #include "io/case.hpp"
@@ -109,7 +110,8 @@ int main(int argc, char** argv) {
     ParticleSet& p = scene.particles;
     // The physics runs on this rank alone (same trajectory for every rank count); only the variants'
     // solves are distributed.
-    FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
+    Distribution self(MPI_COMM_SELF, {});
+    FluidSolver fluid(fluid_setup(spec), p, self);
     std::vector<Real> p_prev, x0, x;
     LocalRows mine;
     Real t = 0;
@@ -128,7 +130,7 @@ int main(int argc, char** argv) {
       const LocalRows& sys = fluid.last_system();  // all rows (MPI_COMM_SELF)
       const auto& row_particle = fluid.row_particles();
       const auto& surface = p.scalar_field("free_surface");
-      rows = sys.n_global_rows;
+      rows = sys.n_rows();
       x0.assign(rows, 0.0);
       for (std::size_t r = 0; r < rows; ++r) {
         const auto i = static_cast<std::size_t>(row_particle[r]);
@@ -136,16 +138,10 @@ int main(int argc, char** argv) {
       }
       for (auto& v : variants) {
         // This rank's block of the full system.
-        mine.n_global_rows = rows;
-        mine.rows = v.solver->owned_rows(rows);
-        const std::size_t k0 = sys.row_ptr[mine.rows.begin], k1 = sys.row_ptr[mine.rows.end];
-        mine.row_ptr.resize(mine.rows.size() + 1);
-        for (std::size_t r = 0; r <= mine.rows.size(); ++r) mine.row_ptr[r] = sys.row_ptr[mine.rows.begin + r] - k0;
-        mine.col.assign(sys.col.begin() + static_cast<std::ptrdiff_t>(k0), sys.col.begin() + static_cast<std::ptrdiff_t>(k1));
-        mine.value.assign(sys.value.begin() + static_cast<std::ptrdiff_t>(k0), sys.value.begin() + static_cast<std::ptrdiff_t>(k1));
-        mine.rhs.assign(sys.rhs.begin() + static_cast<std::ptrdiff_t>(mine.rows.begin),
-                        sys.rhs.begin() + static_cast<std::ptrdiff_t>(mine.rows.end));
-        x = x0;
+        mine = split_system(sys, rank, size);
+        const std::size_t begin = rows / static_cast<std::size_t>(size) * static_cast<std::size_t>(rank) +
+                                  std::min(rows % static_cast<std::size_t>(size), static_cast<std::size_t>(rank));
+        x.assign(x0.begin() + static_cast<std::ptrdiff_t>(begin), x0.begin() + static_cast<std::ptrdiff_t>(begin + mine.n_rows()));
         const PressureSolveResult res = v.solver->solve(mine, x);
         v.matrix += res.t_matrix;
         v.setup += res.t_setup;

@@ -4,6 +4,7 @@
 // against a hand-written CG on the same Tpetra objects, all run for a fixed number of iterations, to
 // split the cost of one CG iteration into SpMV, vector operations and Belos overhead.
 // Usage: bench_fluid_spmv [n_steps [dp]]. Results go to docs/performance.md (## Fluid, ### Pressure solve).
+#include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -56,7 +57,8 @@ int main(int argc, char** argv) {
     const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/dam_break.yaml",
                                     {"dp=" + dp, "fluid.preconditioner=jacobi"});
     Scene scene = build_scene(spec);
-    FluidSolver fluid(fluid_setup(spec), scene.particles, MPI_COMM_SELF);
+    Distribution self(MPI_COMM_SELF, {});
+    FluidSolver fluid(fluid_setup(spec), scene.particles, self);
     Real t = 0;
     for (int s = 0; s < n_steps; ++s) {
       const Real dt = fluid.stable_dt();
@@ -64,7 +66,7 @@ int main(int argc, char** argv) {
       t += dt;
     }
     const LocalRows& sys = fluid.last_system();
-    const std::size_t n = sys.rows.size(), nnz = sys.col.size();
+    const std::size_t n = sys.n_rows(), nnz = sys.col.size();
 
     auto comm = rcp(new Teuchos::MpiComm<int>(MPI_COMM_SELF));
     auto map = rcp(new Map(static_cast<Tpetra::global_size_t>(n), 0, comm));

@@ -1,6 +1,7 @@
 // Unit tests of the run loop (coupling/simulation.cpp) on small cases: the output times never stall, a fluid
 // body that falls out of the domain stops the run, the fluid's dt limits (acceleration, end time), the
 // projection of a run's cost, and the diagnosis of a pressure system that overflows.
+#include "core/distribution.hpp"
 #include "coupling/simulation.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
@@ -139,7 +140,8 @@ TEST(RunProjection, CountsStepsAndFlagsAbsurdRuns) {
 TEST(FluidSolver, OverflowingPressureSystemNamesDt) {
   CaseSpec spec = parse_case(water_case("{end: 1.0, dt: 1.0e-3}"), "block.yaml");
   Scene scene = build_scene(spec);
-  FluidSolver fluid(fluid_setup(spec), scene.particles, MPI_COMM_SELF);
+  Distribution self(MPI_COMM_SELF, {});
+  FluidSolver fluid(fluid_setup(spec), scene.particles, self);
   try {
     fluid.advance(0, 1e-300);
     FAIL() << "no error";

@@ -2,6 +2,7 @@
 // and the exact decay of a lone particle's velocity relative to the tank over one step, with the tank at
 // rest and with the tank rolling.
 #include "core/tank_motion.hpp"
+#include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -37,7 +38,8 @@ Vec velocity_after_step(const CaseSpec& spec, const Vec& v0, const Real t, const
   EXPECT_LT(i_fluid, p.size());
   EXPECT_EQ(p.n_of_kind(ParticleKind::fluid), 1u);
   p.velocity[i_fluid] = v0;
-  FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
+  Distribution self(MPI_COMM_SELF, {});
+  FluidSolver fluid(fluid_setup(spec), p, self);
   fluid.advance(t, dt);
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.kind[i] == ParticleKind::fluid) return p.velocity[i];

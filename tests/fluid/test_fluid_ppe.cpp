@@ -1,6 +1,7 @@
 // Unit tests of the fluid: PPE assembly (seed 004 eq. 12, 23: symmetric, diagonally dominant, the
 // lattice value of an interior row), the free-surface double check (§4.3), and the pressure solve's
 // true residual for every solver / preconditioner choice.
+#include "core/distribution.hpp"
 #include "core/kernel.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "fluid/pressure_solver.hpp"
@@ -25,7 +26,8 @@ CaseSpec still_water_case() {
 struct OneStep {
   CaseSpec spec = still_water_case();
   Scene scene = build_scene(spec);
-  FluidSolver fluid{fluid_setup(spec), scene.particles, MPI_COMM_SELF};
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), scene.particles, dist};
   Real dt = 0;
   FluidStepReport report;
   OneStep() {
@@ -34,7 +36,7 @@ struct OneStep {
   }
 };
 
-Real entry(const LocalRows& s, const std::size_t row, const GlobalId col) {
+Real entry(const LocalRows& s, const std::size_t row, const LocalIndex col) {
   for (std::size_t k = s.row_ptr[row]; k < s.row_ptr[row + 1]; ++k)
     if (s.col[k] == col) return s.value[k];
   return 0;
@@ -46,10 +48,12 @@ TEST(FluidPpe, SymmetricDiagonallyDominantAndSorted) {
   OneStep run;
   const LocalRows& s = run.fluid.last_system();
   const auto& p = run.scene.particles;
-  ASSERT_EQ(s.n_global_rows, p.n_of_kind(ParticleKind::fluid) + p.n_of_kind(ParticleKind::wall));
-  ASSERT_EQ(s.rows.size(), s.n_global_rows);
+  ASSERT_EQ(s.n_rows(), p.n_of_kind(ParticleKind::fluid) + p.n_of_kind(ParticleKind::wall));
+  ASSERT_TRUE(s.remote_id.empty());
+  for (std::size_t r = 0; r < s.n_rows(); ++r)
+    ASSERT_EQ(s.row_id[r], p.global_id[static_cast<std::size_t>(run.fluid.row_particles()[r])]);
   const Real compress = 1.0 / std::pow(run.spec.fluid_materials[0].c * run.dt, 2);
-  for (std::size_t r = 0; r < s.rows.size(); ++r) {
+  for (std::size_t r = 0; r < s.n_rows(); ++r) {
     Real diag = 0, off = 0;
     for (std::size_t k = s.row_ptr[r]; k < s.row_ptr[r + 1]; ++k) {
       if (k > s.row_ptr[r]) {
@@ -62,7 +66,7 @@ TEST(FluidPpe, SymmetricDiagonallyDominantAndSorted) {
       }
       EXPECT_LT(s.value[k], 0.0);
       off += std::abs(s.value[k]);
-      EXPECT_NEAR(entry(s, c, static_cast<GlobalId>(r)), s.value[k], 1e-12 * std::abs(s.value[k])) << r << "," << c;
+      EXPECT_NEAR(entry(s, c, static_cast<LocalIndex>(r)), s.value[k], 1e-12 * std::abs(s.value[k])) << r << "," << c;
     }
     EXPECT_GE(diag, off + compress * (1 - 1e-9)) << "row " << r;
   }
@@ -77,7 +81,7 @@ TEST(FluidPpe, InteriorRowMatchesLattice) {
   const Real compress = 1.0 / std::pow(run.spec.fluid_materials[0].c * run.dt, 2);
   const Real source_scale = run.spec.fluid_materials[0].kappa * run.spec.fluid_materials[0].rho / (run.dt * run.dt);
   std::size_t n_checked = 0;
-  for (std::size_t r = 0; r < s.rows.size(); ++r) {
+  for (std::size_t r = 0; r < s.n_rows(); ++r) {
     const auto i = static_cast<std::size_t>(run.fluid.row_particles()[r]);
     const Vec x = p.position[i];
     // Deep interior: more than re_l + 1 dp from the walls (x = 0, 0.2; y = 0) and from the surface (y = 0.2).
@@ -85,7 +89,7 @@ TEST(FluidPpe, InteriorRowMatchesLattice) {
     if (p.kind[i] != ParticleKind::fluid || x[0] < margin || x[0] > 0.2 - margin || x[1] < margin || x[1] > 0.2 - margin)
       continue;
     ++n_checked;
-    EXPECT_NEAR(entry(s, r, static_cast<GlobalId>(r)), a * lat_l.n0 + compress, 1e-9 * (a * lat_l.n0));
+    EXPECT_NEAR(entry(s, r, static_cast<LocalIndex>(r)), a * lat_l.n0 + compress, 1e-9 * (a * lat_l.n0));
     EXPECT_EQ(s.row_ptr[r + 1] - s.row_ptr[r], static_cast<std::size_t>(lat_l.n_neighbours + 1));
     EXPECT_LT(std::abs(s.rhs[r]), 1e-9 * source_scale);  // rigid translation: n* = n0
   }
@@ -146,41 +150,51 @@ namespace {
 std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSettings& settings,
                                                          const Real absolute_tolerance, Real* b_norm = nullptr) {
   auto solver = make_pressure_solver(settings, MPI_COMM_WORLD);
+  int rank = 0, n_ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
   const int m = 40;
   const std::size_t n = static_cast<std::size_t>(m * m);
-  LocalRows s;
-  s.n_global_rows = n;
-  s.rows = solver->owned_rows(n);
-  s.row_ptr.push_back(0);
+  // The whole system (row ids 1000 + 3 r: ids are names, not positions), then this rank's block.
+  LocalRows whole;
+  whole.row_ptr.push_back(0);
   std::mt19937 rng(3);
   std::uniform_real_distribution<Real> u(-1, 1);
-  std::vector<Real> rhs_all(n);
-  for (auto& v : rhs_all) v = u(rng);
-  for (std::size_t r = s.rows.begin; r < s.rows.end; ++r) {
+  for (std::size_t r = 0; r < n; ++r) {
+    whole.row_id.push_back(1000 + 3 * static_cast<GlobalId>(r));
     const int ix = static_cast<int>(r) % m, iy = static_cast<int>(r) / m;
     const auto add = [&](int jx, int jy, Real v) {
       if (jx < 0 || jy < 0 || jx >= m || jy >= m) return;
-      s.col.push_back(jy * m + jx);
-      s.value.push_back(v);
+      whole.col.push_back(jy * m + jx);
+      whole.value.push_back(v);
     };
     add(ix, iy - 1, -1);
     add(ix - 1, iy, -1);
     add(ix, iy, 4.01);
     add(ix + 1, iy, -1);
     add(ix, iy + 1, -1);
-    s.row_ptr.push_back(s.col.size());
-    s.rhs.push_back(rhs_all[r]);
+    whole.row_ptr.push_back(whole.col.size());
+    whole.rhs.push_back(u(rng));
   }
+  LocalRows s = split_system(whole, rank, n_ranks);
   s.absolute_tolerance = absolute_tolerance;
-  std::vector<Real> x(n, 0.0);
+  std::vector<Real> x(s.n_rows(), 0.0);
   const PressureSolveResult res = solver->solve(s, x);
-  // True residual of the whole system from the gathered solution (identical on every rank).
+  // True residual of the whole system from the solution gathered in row order (the blocks are in order).
+  std::vector<int> counts(static_cast<std::size_t>(n_ranks)), displs(static_cast<std::size_t>(n_ranks), 0);
+  const int mine = static_cast<int>(x.size());
+  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  for (std::size_t q = 1; q < counts.size(); ++q) displs[q] = displs[q - 1] + counts[q - 1];
+  std::vector<Real> x_all(n);
+  MPI_Allgatherv(x.data(), mine, MPI_DOUBLE, x_all.data(), counts.data(), displs.data(), MPI_DOUBLE, MPI_COMM_WORLD);
   Real r2 = 0, b2 = 0;
-  for (std::size_t r = 0; r < s.rows.size(); ++r) {
+  const auto begin = static_cast<std::size_t>(displs[static_cast<std::size_t>(rank)]);
+  for (std::size_t r = begin; r < begin + x.size(); ++r) {
     Real ax = 0;
-    for (std::size_t k = s.row_ptr[r]; k < s.row_ptr[r + 1]; ++k) ax += s.value[k] * x[static_cast<std::size_t>(s.col[k])];
-    r2 += std::pow(s.rhs[r] - ax, 2);
-    b2 += s.rhs[r] * s.rhs[r];
+    for (std::size_t k = whole.row_ptr[r]; k < whole.row_ptr[r + 1]; ++k)
+      ax += whole.value[k] * x_all[static_cast<std::size_t>(whole.col[k])];
+    r2 += std::pow(whole.rhs[r] - ax, 2);
+    b2 += whole.rhs[r] * whole.rhs[r];
   }
   Real sums[2] = {r2, b2}, global[2] = {0, 0};
   MPI_Allreduce(sums, global, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);

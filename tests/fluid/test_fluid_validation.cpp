@@ -4,6 +4,7 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
+#include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -25,7 +26,8 @@ const std::string source_dir = MPSFSI_SOURCE_DIR;
 
 /// Step the fluid to `end`, calling `sample(t)` after every step.
 void run(const CaseSpec& spec, ParticleSet& p, const Real end, const std::function<void(Real)>& sample) {
-  FluidSolver fluid(fluid_setup(spec), p, MPI_COMM_SELF);
+  Distribution self(MPI_COMM_SELF, {});
+  FluidSolver fluid(fluid_setup(spec), p, self);
   Real t = 0;
   int max_it = 0;
   while (t < end - 1e-12) {
