@@ -8,6 +8,7 @@
 // a particle on every rank.
 #pragma once
 
+#include "core/enum_names.hpp"
 #include "core/particles.hpp"
 #include "core/types.hpp"
 
@@ -20,8 +21,15 @@
 
 namespace mpsfsi {
 
-/// Geometric partitioner of Zoltan2.
+/// Geometric partitioner of Zoltan2. Both run Zoltan2's MultiJagged (the only Zoltan2 geometric algorithm that
+/// returns its part boxes): rcb as recursive bisection ("mj_enable_rcb"), multijagged with several cuts per level.
 enum class PartitionMethod { rcb, multijagged };
+
+inline const NameTable<PartitionMethod>& partition_method_names() {
+  static const NameTable<PartitionMethod> t = {{"rcb", PartitionMethod::rcb},
+                                               {"multijagged", PartitionMethod::multijagged}};
+  return t;
+}
 
 struct DistributionSettings {
   PartitionMethod method = PartitionMethod::rcb;

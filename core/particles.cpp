@@ -1,10 +1,11 @@
-// Structure-of-arrays particle storage: appending, extra fields, reordering and removal.
+// Structure-of-arrays particle storage: appending, extra fields, reordering and removal, packing for transfers.
 #include "core/particles.hpp"
 
 #include "core/binary_io.hpp"
 
 #include <algorithm>
 #include <cassert>
+#include <cstring>
 #include <stdexcept>
 
 namespace mpsfsi {
@@ -123,6 +124,92 @@ void ParticleSet::for_each_array(F&& f) {
   f(global_id);
   for (auto& [name, a] : scalar_fields_) f(a);
   for (auto& [name, a] : vector_fields_) f(a);
+}
+
+template <class F>
+void ParticleSet::for_each_array(F&& f) const {
+  f(position);
+  f(velocity);
+  f(kind);
+  f(body);
+  f(material);
+  f(clamped);
+  f(global_id);
+  for (const auto& [name, a] : scalar_fields_) f(a);
+  for (const auto& [name, a] : vector_fields_) f(a);
+}
+
+static_assert(sizeof(Vec) == dim * sizeof(Real), "Vec must be dim contiguous reals (packing, real_array)");
+
+void ParticleSet::drop_ghosts() {
+  if (n_ghost_ == 0) return;
+  const std::size_t n = n_owned();
+  for_each_array([&](auto& a) { a.resize(n); });
+  n_ghost_ = 0;
+  index_stale_ = true;
+}
+
+std::size_t ParticleSet::packed_size() const {
+  std::size_t b = 0;
+  for_each_array([&](const auto& a) { b += sizeof(typename std::decay_t<decltype(a)>::value_type); });
+  return b;
+}
+
+void ParticleSet::pack(const std::vector<LocalIndex>& indices, std::vector<char>& out) const {
+  const std::size_t record = packed_size();
+  const std::size_t start = out.size();
+  out.resize(start + indices.size() * record);
+  std::size_t column = 0;  // byte offset of the current array inside a record
+  for_each_array([&](const auto& a) {
+    using T = typename std::decay_t<decltype(a)>::value_type;
+    char* dst = out.data() + start + column;
+    for (const LocalIndex i : indices) {
+      assert(i >= 0 && static_cast<std::size_t>(i) < a.size());
+      std::memcpy(dst, &a[static_cast<std::size_t>(i)], sizeof(T));
+      dst += record;
+    }
+    column += sizeof(T);
+  });
+}
+
+void ParticleSet::unpack(const char* data, const std::size_t n) {
+  const std::size_t record = packed_size();
+  std::size_t column = 0;
+  for_each_array([&](auto& a) {
+    using T = typename std::decay_t<decltype(a)>::value_type;
+    const std::size_t old = a.size();
+    a.resize(old + n);
+    const char* src = data + column;
+    for (std::size_t k = 0; k < n; ++k, src += record) std::memcpy(static_cast<void*>(&a[old + k]), src, sizeof(T));
+    column += sizeof(T);
+  });
+  index_stale_ = true;
+}
+
+void ParticleSet::unpack_owned(const char* data, const std::size_t n) {
+  assert(n_ghost_ == 0 && "owned particles come before the ghosts: drop the ghosts first");
+  unpack(data, n);
+}
+
+void ParticleSet::unpack_ghosts(const char* data, const std::size_t n) {
+  unpack(data, n);
+  n_ghost_ += n;
+}
+
+std::string ParticleSet::field_layout() const {
+  std::string s;
+  for (const auto& kv : scalar_fields_) s += "s:" + kv.first + "\n";
+  for (const auto& kv : vector_fields_) s += "v:" + kv.first + "\n";
+  return s;
+}
+
+ParticleSet::RealArray ParticleSet::real_array(const std::string& name) {
+  if (name == "position") return {position.empty() ? nullptr : position.data()->data(), dim};
+  if (name == "velocity") return {velocity.empty() ? nullptr : velocity.data()->data(), dim};
+  if (auto it = scalar_fields_.find(name); it != scalar_fields_.end()) return {it->second.data(), 1};
+  if (auto it = vector_fields_.find(name); it != vector_fields_.end())
+    return {it->second.empty() ? nullptr : it->second.data()->data(), dim};
+  throw std::out_of_range("particle array '" + name + "' is neither position, velocity nor a registered field");
 }
 
 void ParticleSet::reorder(const std::vector<LocalIndex>& order) {

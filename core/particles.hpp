@@ -54,8 +54,8 @@ class ParticleSet {
   std::size_t n_of_kind(ParticleKind k) const;
 
   /// Local index (owned or ghost) of the particle with global id `id`, or -1 if this rank does not hold it.
-  /// The map is rebuilt after add, reorder, remove_if and load_state; `global_id` is not to be assigned
-  /// otherwise.
+  /// The map is rebuilt after add, reorder, remove_if, load_state, drop_ghosts and unpack_*; `global_id` is
+  /// not to be assigned otherwise.
   LocalIndex local_index(GlobalId id) const;
 
   /// Append one owned particle with the next unused global id (0, 1, 2, ... for a scene built on one rank);
@@ -82,6 +82,31 @@ class ParticleSet {
   /// Remove the particles with remove[i] != 0, keeping the order of the rest. Returns the count.
   std::size_t remove_if(const std::vector<std::uint8_t>& remove);
 
+  // Transfers between ranks (core/distribution.hpp). A packed particle is every array's value in a fixed order:
+  // position, velocity, kind, body, material, clamped, global_id, the scalar fields by name, the vector fields by
+  // name. Sender and receiver must have registered the same fields (field_layout()).
+
+  /// Removes the ghosts, leaving the owned particles.
+  void drop_ghosts();
+  /// Bytes of one packed particle.
+  std::size_t packed_size() const;
+  /// Appends the packed particles `indices` (local indices, owned or ghost) to `out`.
+  void pack(const std::vector<LocalIndex>& indices, std::vector<char>& out) const;
+  /// Appends `n` packed particles from `data` as owned particles (there must be no ghosts: drop them first).
+  void unpack_owned(const char* data, std::size_t n);
+  /// Appends `n` packed particles from `data` as ghosts, after the owned particles and the present ghosts.
+  void unpack_ghosts(const char* data, std::size_t n);
+  /// The names of the extra fields, scalar then vector ("s:name\nv:name\n..."): equal on every rank of a run.
+  std::string field_layout() const;
+
+  /// A per-particle array of reals by name ("position", "velocity", a scalar or a vector field): `components`
+  /// reals per particle, particle i at data[i * components]. Throws std::out_of_range naming an unknown name.
+  struct RealArray {
+    Real* data = nullptr;
+    int components = 0;
+  };
+  RealArray real_array(const std::string& name);
+
   /// Bytes held by the particle arrays (for the memory estimate).
   std::size_t memory_bytes() const;
 
@@ -96,6 +121,9 @@ class ParticleSet {
   /// Apply f to every per-particle array (core and extra fields).
   template <class F>
   void for_each_array(F&& f);
+  template <class F>
+  void for_each_array(F&& f) const;
+  void unpack(const char* data, std::size_t n);
 
   std::size_t n_ghost_ = 0;
   GlobalId next_id_ = 0;  ///< global id of the next particle added

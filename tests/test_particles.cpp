@@ -1,11 +1,12 @@
-// Unit tests of the particle set (core/particles.hpp): owned and ghost ranges, and the one map from global id
-// to local index, which must follow every reorder, removal and checkpoint load.
+// Unit tests of the particle set (core/particles.hpp): owned and ghost ranges, the one map from global id
+// to local index, which must follow every reorder, removal and checkpoint load, and packing for transfers.
 #include "core/binary_io.hpp"
 #include "core/particles.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <vector>
 
 using namespace mpsfsi;
@@ -63,4 +64,53 @@ TEST(ParticleSet, LocalIndexAfterLoadState) {
   q.load_state(r);
   EXPECT_EQ(q.local_index(0), 1);
   expect_map_consistent(q);
+}
+
+TEST(ParticleSet, PackUnpackCarriesEveryArrayAndGhostsStayLast) {
+  ParticleSet p = five_particles();
+  auto& s = p.add_scalar_field("s", 0);
+  auto& v = p.add_vector_field("v");
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    s[i] = 10.0 + static_cast<Real>(i);
+    v[i] = Vec::Constant(-static_cast<Real>(i));
+    p.velocity[i] = Vec::Constant(0.5 * static_cast<Real>(i));
+    p.kind[i] = ParticleKind::solid;
+    p.clamped[i] = static_cast<std::uint8_t>(i % 2);
+  }
+  std::vector<char> buf;
+  p.pack({3, 1}, buf);
+  EXPECT_EQ(buf.size(), 2 * p.packed_size());
+
+  ParticleSet q;
+  q.bodies = p.bodies;
+  q.add_scalar_field("s", 0);
+  q.add_vector_field("v");
+  EXPECT_EQ(q.field_layout(), p.field_layout());
+  q.unpack_owned(buf.data(), 1);  // particle 3 as owned
+  q.unpack_ghosts(buf.data() + q.packed_size(), 1);  // particle 1 as a ghost
+  ASSERT_EQ(q.size(), 2u);
+  EXPECT_EQ(q.n_owned(), 1u);
+  EXPECT_EQ(q.n_ghost(), 1u);
+  EXPECT_EQ(q.global_id[0], 3);
+  EXPECT_EQ(q.global_id[1], 1);
+  EXPECT_EQ(q.local_index(1), 1);
+  EXPECT_EQ(q.position[0], p.position[3]);
+  EXPECT_EQ(q.velocity[1], p.velocity[1]);
+  EXPECT_EQ(q.kind[0], ParticleKind::solid);
+  EXPECT_EQ(q.clamped[0], 1);
+  EXPECT_EQ(q.clamped[1], 1);
+  EXPECT_EQ(q.scalar_field("s")[0], 13.0);
+  EXPECT_EQ(q.vector_field("v")[1], Vec::Constant(-1.0));
+
+  auto arr = q.real_array("v");
+  EXPECT_EQ(arr.components, dim);
+  EXPECT_EQ(arr.data[dim], -1.0);
+  EXPECT_THROW(q.real_array("nonexistent"), std::out_of_range);
+
+  q.drop_ghosts();
+  EXPECT_EQ(q.size(), 1u);
+  EXPECT_EQ(q.n_ghost(), 0u);
+  EXPECT_EQ(q.local_index(1), -1);
+  EXPECT_EQ(q.local_index(3), 0);
+  EXPECT_EQ(q.scalar_field("s").size(), 1u);
 }
