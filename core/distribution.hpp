@@ -40,7 +40,9 @@ struct DistributionSettings {
   Real imbalance_threshold = 0.1;
 };
 
-/// An axis-aligned box; the outer faces of a partition's boxes are +-infinity.
+/// An axis-aligned box; the outer faces of a partition's boxes are +-infinity. It holds the points with
+/// lo <= x < hi on every axis (x == hi too where hi is +infinity), so a point on a face shared by two regions
+/// belongs to the one above it. A region with no points (an empty part) has lo = +inf, hi = -inf.
 struct Box {
   Vec lo, hi;
   bool contains(const Vec& x) const;
@@ -59,6 +61,7 @@ struct DistributionStats {
 
 class Distribution {
  public:
+  /// Collective: duplicates `comm` for its own messages (freed by the destructor, before MPI_Finalize).
   Distribution(MPI_Comm comm, const DistributionSettings& settings);
   ~Distribution();
   Distribution(const Distribution&) = delete;
@@ -93,9 +96,11 @@ class Distribution {
   /// zero (contributions computed at ghosts, e.g. a force on another rank's particle). Collective.
   void reverse_sum(ParticleSet& p, const std::vector<std::string>& fields);
 
-  /// The rank whose region holds x.
+  /// The rank whose region holds x (-1 for a non-finite x).
   int owner_of(const Vec& x) const;
-  /// Every rank's region (empty before the first partition).
+  /// Every rank's region (empty before the first partition). With no particles at all, or a partition whose
+  /// boxes cannot tile space (all particles on one plane that the partition cuts), rank 0's region is all
+  /// space and the other regions are empty.
   const std::vector<Box>& regions() const { return regions_; }
   const DistributionStats& stats() const { return stats_; }
 
