@@ -42,7 +42,9 @@ struct DistributionSettings {
   bool all_on_rank0 = false;
 };
 
-/// An axis-aligned box; the outer faces of a partition's boxes are +-infinity.
+/// An axis-aligned box; the outer faces of a partition's boxes are +-infinity. It holds the points with
+/// lo <= x < hi on every axis (x == hi too where hi is +infinity), so a point on a face shared by two regions
+/// belongs to the one above it. A region with no points (an empty part) has lo = +inf, hi = -inf.
 struct Box {
   Vec lo, hi;
   bool contains(const Vec& x) const;
@@ -61,6 +63,7 @@ struct DistributionStats {
 
 class Distribution {
  public:
+  /// Collective: duplicates `comm` for its own messages (freed by the destructor, before MPI_Finalize).
   Distribution(MPI_Comm comm, const DistributionSettings& settings);
   ~Distribution();
   Distribution(const Distribution&) = delete;
@@ -101,9 +104,11 @@ class Distribution {
   /// On rank `root`: every rank's owned particles (all arrays), in order of global id; elsewhere an empty
   /// set with the same fields. Collective.
   ParticleSet gather(const ParticleSet& p, int root) const;
-  /// The rank whose region holds x.
+  /// The rank whose region holds x (-1 for a non-finite x).
   int owner_of(const Vec& x) const;
-  /// Every rank's region (empty before the first partition).
+  /// Every rank's region (empty before the first partition). With no particles at all, or a partition whose
+  /// boxes cannot tile space (all particles on one plane that the partition cuts), rank 0's region is all
+  /// space and the other regions are empty.
   const std::vector<Box>& regions() const { return regions_; }
   const DistributionStats& stats() const { return stats_; }
 
