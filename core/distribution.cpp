@@ -3,6 +3,8 @@
 // exchanges over the ghost plan. Zoltan2 (and Kokkos) stay inside this file.
 #include "core/distribution.hpp"
 
+#include "core/binary_io.hpp"
+
 #include <Kokkos_Core.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <Teuchos_ParameterList.hpp>
@@ -257,10 +259,10 @@ bool extend_to_infinity(std::vector<Box>& boxes) {
 /// Regions from Zoltan2 on the points given by each rank, or (no points at all, or a degenerate partition
 /// whose boxes cannot tile space) rank 0 owning all space. Collective.
 std::vector<Box> compute_regions(MPI_Comm comm, const int n_ranks, const PartitionMethod method, const Vec* x,
-                                 const GlobalId* gid, const Real* w, const std::size_t n) {
+                                 const GlobalId* gid, const Real* w, const std::size_t n, const bool all_on_rank0) {
   std::vector<Box> fallback(static_cast<std::size_t>(n_ranks), empty_box());
   fallback[0] = all_space();
-  if (n_ranks == 1) return fallback;
+  if (n_ranks == 1 || all_on_rank0) return fallback;
   unsigned long long local = n, total = 0;
   MPI_Allreduce(&local, &total, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
   if (total == 0) return fallback;
@@ -290,7 +292,7 @@ void Distribution::partition(ParticleSet& p, const std::vector<Real>& weights) {
   check_positions(impl_->comm, p, n);
   check_weights(impl_->comm, p, weights, 0, n);
   regions_ = compute_regions(impl_->comm, n_ranks_, settings_.method, p.position.data(), p.global_id.data(),
-                                     weights.empty() ? nullptr : weights.data(), n);
+                                     weights.empty() ? nullptr : weights.data(), n, settings_.all_on_rank0);
   ++stats_.n_partitions;
   stats_.t_partition += seconds_since(t0);
   migrate(p);
@@ -316,7 +318,7 @@ void Distribution::distribute_replicated(ParticleSet& p, const std::vector<Real>
   if (!weights.empty()) check_weights(impl_->comm, p, weights, 0, n_all);
   regions_ = compute_regions(impl_->comm, n_ranks_, settings_.method, p.position.data() + first,
                                      p.global_id.data() + first, weights.empty() ? nullptr : weights.data() + first,
-                                     last - first);
+                                     last - first, settings_.all_on_rank0);
   ++stats_.n_partitions;
   if (n_ranks_ > 1) {
     std::vector<std::uint8_t> remove(n_all);
@@ -395,6 +397,89 @@ void Distribution::migrate(ParticleSet& p) {
 
 // ---------------------------------------------------------------------------------------------------------------
 // Ghosts
+
+int Distribution::ghost_owner(const std::size_t k) const {
+  const Impl& m = *impl_;
+  assert(m.have_plan && k < m.plan_ghost && "ghost_owner: no such ghost in the last build_ghosts()");
+  // The last rank whose block of ghosts starts at or before k (blocks of ranks that sent none are empty).
+  const auto it = std::upper_bound(m.recv_offset.begin(), m.recv_offset.end(), k);
+  auto q = static_cast<std::size_t>(it - m.recv_offset.begin()) - 1;
+  while (m.recv_count[q] == 0) --q;
+  return static_cast<int>(q);
+}
+
+ParticleSet Distribution::gather(const ParticleSet& p, const int root) const {
+  ParticleSet out = p;
+  out.drop_ghosts();
+  if (n_ranks_ == 1) return out;
+  std::vector<LocalIndex> mine(p.n_owned());
+  for (std::size_t i = 0; i < mine.size(); ++i) mine[i] = static_cast<LocalIndex>(i);
+  std::vector<char> send;
+  p.pack(mine, send);
+  const int n_bytes = to_int(send.size());
+  std::vector<int> counts(static_cast<std::size_t>(n_ranks_)), displs(static_cast<std::size_t>(n_ranks_), 0);
+  MPI_Gather(&n_bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, root, impl_->comm);
+  std::vector<char> all;
+  if (rank_ == root) {
+    std::size_t total = 0;
+    for (std::size_t q = 0; q < counts.size(); ++q) {
+      displs[q] = to_int(total);
+      total += static_cast<std::size_t>(counts[q]);
+    }
+    all.resize(total);
+  }
+  MPI_Gatherv(send.data(), n_bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, root, impl_->comm);
+  std::vector<std::uint8_t> remove(out.size(), 1);
+  out.remove_if(remove);  // keeps the fields, drops the particles
+  if (rank_ != root) return out;
+  out.unpack_owned(all.data(), all.size() / p.packed_size());
+  return out;
+}
+
+void Distribution::save_state(BinaryWriter& out, const ParticleSet& p, const int root) const {
+  unsigned long long owned = p.n_owned();
+  std::vector<unsigned long long> counts(static_cast<std::size_t>(n_ranks_));
+  MPI_Gather(&owned, 1, MPI_UNSIGNED_LONG_LONG, counts.data(), 1, MPI_UNSIGNED_LONG_LONG, root, impl_->comm);
+  if (rank_ != root) return;
+  out.section("distribution");
+  out.i64(n_ranks_);
+  out.u64(regions_.size());
+  for (const Box& b : regions_) {
+    out.value(b.lo);
+    out.value(b.hi);
+  }
+  out.array(counts);
+}
+
+void Distribution::load_state(BinaryReader& in, ParticleSet& p) {
+  in.expect_section("distribution");
+  const auto n_saved = static_cast<int>(in.i64("the rank count"));
+  const std::size_t n_regions = in.u64("the region count");
+  if (n_regions > 1u << 20) in.fail("the distribution's regions are inconsistent");
+  std::vector<Box> regions(n_regions);
+  for (Box& b : regions) {
+    b.lo = in.value<Vec>("a region");
+    b.hi = in.value<Vec>("a region");
+  }
+  const auto counts = in.array<unsigned long long>("the owned counts");
+  unsigned long long total = 0;
+  for (const auto c : counts) total += c;
+  if (counts.size() != static_cast<std::size_t>(n_saved) || total != p.size())
+    in.fail("the distribution's counts do not match the particles");
+  if (n_saved != n_ranks_ || (n_ranks_ > 1 && regions.size() != static_cast<std::size_t>(n_ranks_))) {
+    distribute_replicated(p);
+    return;
+  }
+  p.drop_ghosts();
+  impl_->have_plan = false;
+  if (n_ranks_ > 1) regions_ = regions;
+  std::size_t begin = 0;
+  for (int q = 0; q < rank_; ++q) begin += static_cast<std::size_t>(counts[static_cast<std::size_t>(q)]);
+  const std::size_t end = begin + static_cast<std::size_t>(counts[static_cast<std::size_t>(rank_)]);
+  std::vector<std::uint8_t> remove(p.size(), 1);
+  for (std::size_t i = begin; i < end; ++i) remove[i] = 0;
+  p.remove_if(remove);
+}
 
 void Distribution::build_ghosts(ParticleSet& p) {
   const auto t0 = Clock::now();

@@ -61,6 +61,9 @@ struct DistributionStats {
   double t_partition = 0, t_migrate = 0, t_halo = 0;  ///< seconds, accumulated
 };
 
+class BinaryWriter;
+class BinaryReader;
+
 class Distribution {
  public:
   /// Collective: duplicates `comm` for its own messages (freed by the destructor, before MPI_Finalize).
@@ -101,9 +104,16 @@ class Distribution {
 
   /// The rank that owns ghost k (the particle of local index n_owned() + k) since the last build_ghosts().
   int ghost_owner(std::size_t k) const;
-  /// On rank `root`: every rank's owned particles (all arrays), in order of global id; elsewhere an empty
-  /// set with the same fields. Collective.
+  /// On rank `root`: every rank's owned particles (all arrays) in order of rank, then of local index;
+  /// elsewhere an empty set with the same fields. Collective.
   ParticleSet gather(const ParticleSet& p, int root) const;
+  /// Checkpoints (rank `root` writes, after gather(p, root)): the ranks' regions and owned counts, so that a
+  /// restart on as many ranks gives every rank back its particles in their order. Collective.
+  void save_state(BinaryWriter& out, const ParticleSet& p, int root) const;
+  /// Restart: `p` holds a whole gathered set on every rank; reads what save_state wrote and keeps on this
+  /// rank its own particles: the saved ones on as many ranks as saved them, else by a new partition
+  /// (distribute_replicated). Collective.
+  void load_state(BinaryReader& in, ParticleSet& p);
   /// The rank whose region holds x (-1 for a non-finite x).
   int owner_of(const Vec& x) const;
   /// Every rank's region (empty before the first partition). With no particles at all, or a partition whose

@@ -513,7 +513,10 @@ class RunLoop {
 
   void report_progress(const Clock::time_point t_start, const bool final) {
     const bool periodic = step_ % static_cast<std::size_t>(std::max(1, settings_.log_every)) == 0 || step_ == 1;
-    if (n_ranks_ > 1 && (periodic || final) && step_ != logged_step_) report_distribution();
+    if (n_ranks_ > 1 && (periodic || final) && step_ != logged_step_) {
+      report_distribution();  // a collective: every rank keeps logged_step_
+      if (rank_ != 0) logged_step_ = step_;
+    }
     if (rank_ != 0) return;
     const double wall = seconds_since(t_start);
     const double rate = wall > 0 ? static_cast<double>(step_ - step_begin_) / wall : 0;
@@ -602,18 +605,21 @@ class RunLoop {
   /// a failure stops the run on every rank.
   void write_checkpoint_now() {
     try {
-      const ParticleSet all = dist_->gather(p_, 0);  // rank 0: every particle, by global id
-      on_rank0(comm_, [&] { write_checkpoint_on_rank0(all); });
+      const ParticleSet all = dist_->gather(p_, 0);  // rank 0: every particle, rank by rank
+      BinaryWriter distribution;
+      dist_->save_state(distribution, p_, 0);
+      on_rank0(comm_, [&] { write_checkpoint_on_rank0(all, distribution); });
     } catch (const OutputError& e) {
       throw OutputError(stopped_by_output(e.what()));
     }
   }
 
-  void write_checkpoint_on_rank0(const ParticleSet& all) {
+  void write_checkpoint_on_rank0(const ParticleSet& all, const BinaryWriter& distribution) {
     const auto t0 = Clock::now();
     BinaryWriter w;
     save_run_state(w);
     all.save_state(w);
+    w.bytes() += distribution.bytes();
     if (fluid_) fluid_->save_state(w);
     if (solid_) solid_->save_state(w);
     if (coupling_) coupling_->save_state(w);
@@ -678,7 +684,8 @@ class RunLoop {
         in.fail("the checkpoint's run has other participants (fluid, solid, coupling) than this case");
       receivers_.load_state(in);
       p_.drop_ghosts();
-      p_.load_state(in);  // every particle, on every rank: distributed below
+      p_.load_state(in);  // every particle, on every rank
+      dist_->load_state(in, p_);
       if (fluid_) exact_ = fluid_->load_state(in);
       if (solid_) solid_->load_state(in);
       if (coupling_) coupling_->load_state(in);
@@ -689,13 +696,12 @@ class RunLoop {
     } catch (const StateFormatError& e) {
       throw CaseError(std::string("checkpoint ") + e.what());
     }
-    dist_->distribute_replicated(p_);
     if (!exact_ && log_)
       fmt::print("note: the pressure preconditioner the checkpoint's run kept between setups "
                  "(fluid.preconditioner_rebuild_every > 1) cannot be rebuilt here (it was saved on several ranks, or "
                  "the setting changed) and is set up anew: the continuation agrees with the original run to the "
                  "solver tolerance, not bit for bit\n");
-    if (rank_ == 0) {
+    on_rank0(comm_, [&] {
       if (settings_.continue_series)
         writer_.adopt_existing(t_, c.info.next_frame);
       else
@@ -703,6 +709,11 @@ class RunLoop {
       jsonl_ << fmt::format("{{\"event\":\"restart\",\"step\":{},\"t\":{:.9g},\"checkpoint\":\"{}\"}}\n", step_, t_,
                             json_escape(c.path));
       jsonl_.flush();
+    });
+    if (n_ranks_ > 1) {  // every piece continues with rank 0's frame number
+      unsigned long long next = writer_.next_frame();
+      MPI_Bcast(&next, 1, MPI_UNSIGNED_LONG_LONG, 0, comm_);
+      writer_.set_next_frame(next);
     }
   }
 

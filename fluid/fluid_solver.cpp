@@ -152,10 +152,14 @@ struct FluidSolver::Impl {
     const Real decay = std::exp(-lateral_friction * dt);
     const bool friction = lateral_friction > 0;
     const auto takes_part = [&](const std::size_t j) { return roles[j] != Role::none; };
+    // The Laplacian of the velocities at the start of the step, for every particle before any moves.
+    dv.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      dv[i] = roles[i] == Role::fluid && nu > 0 ? laplacian_sum_at(p.position, nl, re_l, i, p.velocity, takes_part)
+                                                : Vec::Zero();
     for (std::size_t i = 0; i < n; ++i) {
       if (roles[i] != Role::fluid) continue;
-      const Vec lap = nu > 0 ? laplacian_sum_at(p.position, nl, re_l, i, p.velocity, takes_part) : Vec::Zero();
-      p.velocity[i] += dt * (nu * a * lap + gravity);
+      p.velocity[i] += dt * (nu * a * dv[i] + gravity);
       if (friction) {
         const Vec v_wall = motion.moving() ? motion.velocity_at(p.position[i], wall_omega) : Vec::Zero();
         p.velocity[i] = v_wall + decay * (p.velocity[i] - v_wall);

@@ -34,7 +34,8 @@ def main():
                      f"[-{len(files)}, {len(files) - 1}] separated by commas")
     print("frame, median [m/s], 99th percentile [m/s], max [m/s], x of max [m], y of max [m]")
     for f in files:
-        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader = (vtk.vtkXMLPUnstructuredGridReader() if f.endswith(".pvtu")  # pieces of a run on several ranks
+                else vtk.vtkXMLUnstructuredGridReader())
         reader.SetFileName(f)
         reader.Update()
         grid = reader.GetOutput()

@@ -232,7 +232,8 @@ def main(argv=None):
     case_name, run_dp = run_info(os.path.dirname(os.path.abspath(pvd)))
 
     def load(path):
-        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader = (vtk.vtkXMLPUnstructuredGridReader() if path.endswith(".pvtu")  # pieces of a run on several ranks
+                else vtk.vtkXMLUnstructuredGridReader())
         reader.SetFileName(path)
         reader.Update()
         grid = reader.GetOutput()

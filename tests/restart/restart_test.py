@@ -58,7 +58,8 @@ def pvd_entries(folder):
 
 
 def read_frame(path):
-    reader = vtk.vtkXMLUnstructuredGridReader()
+    reader = (vtk.vtkXMLPUnstructuredGridReader() if path.endswith(".pvtu")  # pieces of a run on several ranks
+            else vtk.vtkXMLUnstructuredGridReader())
     reader.SetFileName(path)
     reader.Update()
     grid = reader.GetOutput()

@@ -25,7 +25,8 @@ def check_series(out):
     entries = root.findall("./Collection/DataSet")
     for e in entries:
         path = os.path.join(out, e.get("file"))
-        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader = (vtk.vtkXMLPUnstructuredGridReader() if path.endswith(".pvtu")  # pieces of a run on several ranks
+                else vtk.vtkXMLUnstructuredGridReader())
         reader.SetFileName(path)
         errors = vtk.vtkStringOutputWindow()
         vtk.vtkOutputWindow.SetInstance(errors)
