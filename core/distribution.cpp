@@ -148,6 +148,7 @@ struct Distribution::Impl {
   std::vector<std::size_t> recv_count, recv_offset;  ///< per rank: its particles I hold as ghosts, where
   std::size_t plan_owned = 0, plan_ghost = 0;        ///< the set the plan was built for
   bool have_plan = false;
+  std::vector<Vec> x_at_plan;                        ///< the owned particles' positions at build_ghosts()
 };
 
 Distribution::Distribution(MPI_Comm comm, const DistributionSettings& settings)
@@ -398,6 +399,23 @@ void Distribution::migrate(ParticleSet& p) {
 // ---------------------------------------------------------------------------------------------------------------
 // Ghosts
 
+bool Distribution::needs_rebuild(const ParticleSet& p, const bool requested) const {
+  const Impl& m = *impl_;
+  int rebuild = requested ? 1 : 0;
+  if (n_ranks_ > 1) {
+    if (!m.have_plan || p.n_owned() != m.plan_owned || p.n_ghost() != m.plan_ghost) {
+      rebuild = 1;
+    } else {
+      Real moved2 = 0;
+      for (std::size_t i = 0; i < p.n_owned(); ++i) moved2 = std::max(moved2, (p.position[i] - m.x_at_plan[i]).squaredNorm());
+      // Two particles approach each other by at most twice the largest displacement.
+      if (!(2 * std::sqrt(moved2) <= settings_.skin)) rebuild = 1;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &rebuild, 1, MPI_INT, MPI_MAX, m.comm);
+  }
+  return rebuild != 0;
+}
+
 int Distribution::ghost_owner(const std::size_t k) const {
   const Impl& m = *impl_;
   assert(m.have_plan && k < m.plan_ghost && "ghost_owner: no such ghost in the last build_ghosts()");
@@ -489,7 +507,9 @@ void Distribution::build_ghosts(ParticleSet& p) {
   m.send_index.assign(P, {});
   m.recv_count.assign(P, 0);
   m.recv_offset.assign(P, 0);
+  ++stats_.n_ghost_builds;
   m.plan_owned = p.n_owned();
+  m.x_at_plan.assign(p.position.begin(), p.position.begin() + static_cast<std::ptrdiff_t>(p.n_owned()));
   m.plan_ghost = 0;
   m.have_plan = true;
   stats_.halo_bytes = 0;
@@ -543,6 +563,7 @@ void Distribution::build_ghosts(ParticleSet& p) {
     if (m.send_index[q].empty()) continue;
     p.pack(m.send_index[q], send_buf[q]);
     stats_.halo_bytes += send_buf[q].size();
+    stats_.halo_bytes_total += send_buf[q].size();
     requests.emplace_back();
     MPI_Isend(send_buf[q].data(), to_int(send_buf[q].size()), MPI_BYTE, static_cast<int>(q), 1, m.comm,
               &requests.back());
@@ -595,6 +616,7 @@ void Distribution::exchange_ghosts(ParticleSet& p, const std::vector<std::string
       for (const auto& a : arrays)
         for (int c = 0; c < a.components; ++c) buf.push_back(a.data[static_cast<std::size_t>(i) * a.components + c]);
     stats_.halo_bytes += buf.size() * sizeof(Real);
+    stats_.halo_bytes_total += buf.size() * sizeof(Real);
     requests.emplace_back();
     MPI_Isend(buf.data(), to_int(buf.size()), MPI_DOUBLE, static_cast<int>(q), 2, m.comm, &requests.back());
   }
@@ -643,6 +665,7 @@ void Distribution::reverse_sum(ParticleSet& p, const std::vector<std::string>& f
         }
     }
     stats_.halo_bytes += buf.size() * sizeof(Real);
+    stats_.halo_bytes_total += buf.size() * sizeof(Real);
     requests.emplace_back();
     MPI_Isend(buf.data(), to_int(buf.size()), MPI_DOUBLE, static_cast<int>(q), 3, m.comm, &requests.back());
   }

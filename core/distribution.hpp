@@ -36,6 +36,9 @@ struct DistributionSettings {
   /// Ghosts: other ranks' particles within this distance of the region (the largest interaction radius
   /// plus the skin) [m].
   Real halo_width = 0;
+  /// The part of halo_width beyond the interaction radius [m]: the owners and ghosts stay valid until a
+  /// particle has moved half of it (needs_rebuild).
+  Real skin = 0;
   /// Re-partition when (largest owned work) / (mean owned work) - 1 passes this.
   Real imbalance_threshold = 0.1;
   /// Every particle on rank 0, the other ranks' regions empty: for modules not distributed yet (the solid).
@@ -57,7 +60,9 @@ struct DistributionStats {
   std::size_t n_migrated_out = 0;   ///< particles sent by the last migrate()
   std::size_t n_ghosts = 0;         ///< ghosts held after the last build_ghosts()
   std::size_t halo_bytes = 0;       ///< bytes sent by this rank in the last build_ghosts() + exchanges since
+  std::size_t halo_bytes_total = 0; ///< bytes sent by this rank in all build_ghosts() and exchanges
   int n_partitions = 0;             ///< partitions computed so far
+  int n_ghost_builds = 0;           ///< build_ghosts() calls so far
   double t_partition = 0, t_migrate = 0, t_halo = 0;  ///< seconds, accumulated
 };
 
@@ -95,6 +100,11 @@ class Distribution {
   /// are appended after the owned particles in order of sending rank, then of the sender's local index.
   /// Collective.
   void build_ghosts(ParticleSet& p);
+  /// Whether the owners and ghosts must be renewed (migrate, build_ghosts) before the particles are used
+  /// again: `requested` on some rank, the ghost plan does not fit the particles (removed, migrated), or a
+  /// particle moved more than half the skin since the last build_ghosts(). Always false on one rank unless
+  /// requested. Collective: every rank gets the same answer.
+  bool needs_rebuild(const ParticleSet& p, bool requested = false) const;
   /// Refreshes the named fields ("position", "velocity" or registered scalar / vector fields) of the
   /// ghosts from their owners, with the plan of the last build_ghosts(). Collective.
   void exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields);

@@ -127,9 +127,12 @@ class RunLoop {
     const bool has_fluid = p_.n_of_kind(ParticleKind::fluid) > 0, has_solid = p_.n_of_kind(ParticleKind::solid) > 0;
     has_solid_ = has_solid;
     DistributionSettings ds;
-    // The halo: the fluid's neighbour radius plus a skin of one particle spacing (a step moves particles by
-    // a fraction of dp; the owners and ghosts are renewed at every step).
-    ds.halo_width = (has_fluid ? fluid_interaction_radius(fluid_setup(spec)) : 0) + spec.dp;
+    // The halo: the fluid's neighbour radius plus the skin (the owners and ghosts are renewed when a particle
+    // has moved half of it).
+    ds.method = spec.parallel.partition;
+    ds.imbalance_threshold = spec.parallel.imbalance;
+    ds.skin = spec.parallel.skin * spec.dp;
+    ds.halo_width = (has_fluid ? fluid_interaction_radius(fluid_setup(spec)) : 0) + ds.skin;
     ds.all_on_rank0 = has_solid;
     dist_ = std::make_unique<Distribution>(comm, ds);
     dist_->distribute_replicated(p_);

@@ -381,10 +381,10 @@ struct FluidSolver::Impl {
     report.t_halo += seconds_since(t0);
   }
 
-  /// Fluid particles outside the case's domain are removed (after the ghosts are dropped).
+  /// Fluid particles outside the case's domain are removed (with the ghosts, which are then renewed at the
+  /// next step).
   std::size_t remove_escaped() {
-    p.drop_ghosts();
-    const std::size_t n = p.size();
+    const std::size_t n = p.n_owned();
     remove.assign(n, 0);
     std::size_t n_out = 0;
     for (std::size_t i = 0; i < n; ++i)
@@ -392,7 +392,10 @@ struct FluidSolver::Impl {
         remove[i] = 1;
         ++n_out;
       }
-    if (n_out > 0) p.remove_if(remove);
+    if (n_out > 0) {
+      p.drop_ghosts();
+      p.remove_if(remove);
+    }
     return n_out;
   }
 
@@ -496,13 +499,18 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.dt = dt;
   auto t0 = Clock::now();
   const auto t_begin = t0;
-  // Owners for the positions the last step left, cell order now and then, ghosts within the halo.
-  m.p.drop_ghosts();
-  m.dist.migrate(m.p);
+  // Owners and ghosts are renewed (with the cell order now and then) when a particle has moved half the
+  // skin since they were built; in between, the ghosts' positions and velocities are refreshed.
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
-  if (m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0)
-    m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
-  m.dist.build_ghosts(m.p);
+  const bool reorder = m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0;
+  if (m.dist.needs_rebuild(m.p, reorder)) {
+    m.p.drop_ghosts();
+    m.dist.migrate(m.p);
+    if (reorder) m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
+    m.dist.build_ghosts(m.p);
+  } else {
+    m.dist.exchange_ghosts(m.p, {"position", "velocity"});
+  }
   report.t_halo += seconds_since(t0);
   t0 = Clock::now();
   m.classify();

@@ -9,6 +9,7 @@
 #include "core/tank_motion.hpp"
 #include "core/time_spec.hpp"
 #include "core/types.hpp"
+#include "core/distribution.hpp"
 #include "coupling/coupling_parameters.hpp"
 #include "fluid/fluid_parameters.hpp"
 #include "solid/solid_parameters.hpp"
@@ -77,6 +78,14 @@ struct ReceiverSpec {
   Vec position = Vec::Zero();
 };
 
+/// How a run spreads its particles over the MPI ranks (core/distribution.hpp): the geometric partitioner,
+/// the imbalance of owned particles that triggers a new partition, and the skin of the halo [in dp].
+struct ParallelSpec {
+  PartitionMethod partition = PartitionMethod::rcb;
+  Real imbalance = 0.1;
+  Real skin = 2.0;
+};
+
 struct ReceiversSpec {
   std::optional<Real> interval;   ///< simulated time between rows of receivers.csv [s]; none: every step
   Real radius = 0;                ///< stencil radius [m]; the parser's default is 2 dp
@@ -103,6 +112,7 @@ struct CaseSpec {
   std::vector<WallSpec> walls;
   TankMotionSpec tank_motion;
   CouplingParameters coupling;
+  ParallelSpec parallel;
   FluidParameters fluid;
   SolidParameters solid;
   std::vector<SolidLoadSpec> solid_loads;

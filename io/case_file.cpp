@@ -918,6 +918,17 @@ void read_coupling(MapReader r, CouplingParameters& c) {
   r.finish();
 }
 
+void read_parallel(MapReader r, ParallelSpec& par) {
+  par.partition = r.option("partition", par.partition, partition_method_names());
+  par.imbalance = r.number("imbalance", par.imbalance, [](Real x) { return x > 0 && x <= 10; },
+                           "a number in (0, 10] (re-partition when the largest rank's owned particles exceed the mean "
+                           "by this fraction)");
+  par.skin = r.number("skin", par.skin, [](Real x) { return x >= 0 && x <= 10; },
+                      "a number in [0, 10] (halo skin in units of dp: owners and ghosts are renewed when a particle "
+                      "has moved half of it)");
+  r.finish();
+}
+
 void read_lateral_walls(MapReader r, const TankMotionSpec& motion, LateralWallFriction& w) {
   if (!r.field().node.IsDefined() || r.field().node.IsNull()) return;
   w.gap = r.number("gap", positive, "a positive number (distance between the front and back walls) [m]");
@@ -1224,6 +1235,7 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
 
   read_tank_motion(top.optional_map("tank_motion", "a map {type: none | sine_roll | table, ...}"), base_dir, spec);
   read_coupling(top.optional_map("coupling", "a map {subcycles, solid_damping, load_relaxation}"), spec.coupling);
+  read_parallel(top.optional_map("parallel", "a map {partition, imbalance, skin}"), spec.parallel);
   read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.tank_motion,
                       spec.fluid);
   read_solid_numerics(top.optional_map("solid", "a map of solid numerics {re, dt, plane_stress, ...}"), spec.solid_materials,
@@ -1423,7 +1435,7 @@ const std::vector<std::string>& restart_tunable_keys() {
   static const std::vector<std::string> keys = {
       "time.cfl",       "time.dt",         "time.dt_max",         "coupling.subcycles",
       "fluid.solver",   "fluid.preconditioner", "fluid.tolerance", "fluid.max_iterations",
-      "fluid.preconditioner_rebuild_every", "fluid.max_loss", "solid.dt", "solid.dt_factor"};
+      "fluid.preconditioner_rebuild_every", "fluid.max_loss", "solid.dt", "solid.dt_factor", "parallel"};
   return keys;
 }
 

@@ -34,7 +34,9 @@ int main(int argc, char** argv) {
     ParticleSet& p = scene.particles;
     const std::size_t n_particles = p.size(), n_fluid = p.n_of_kind(ParticleKind::fluid);
     DistributionSettings ds;
-    ds.halo_width = fluid_interaction_radius(fluid_setup(spec)) + spec.dp;
+    ds.method = spec.parallel.partition;
+    ds.skin = spec.parallel.skin * spec.dp;
+    ds.halo_width = fluid_interaction_radius(fluid_setup(spec)) + ds.skin;
     Distribution dist(MPI_COMM_WORLD, ds);
     dist.distribute_replicated(p);
     FluidSolver fluid(fluid_setup(spec), p, dist);
@@ -55,7 +57,7 @@ int main(int argc, char** argv) {
       sum.t_halo += r.t_halo;
       sum.t_rest += r.t_rest;
       iterations += r.iterations;
-      halo_bytes += dist.stats().halo_bytes;
+      halo_bytes = dist.stats().halo_bytes_total;
       ghosts += dist.stats().n_ghosts;
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -69,9 +71,20 @@ int main(int argc, char** argv) {
     double halo[2] = {static_cast<double>(halo_bytes), static_cast<double>(ghosts)};
     MPI_Allreduce(MPI_IN_PLACE, halo, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     const double ms = 1e3 / n_steps;
+    {  // owned particles per rank at the end
+      unsigned long long mine[4] = {p.n_owned(), 0, 0, 0};
+      std::vector<unsigned long long> all(4 * static_cast<std::size_t>(n_ranks));
+      for (std::size_t i = 0; i < p.n_owned(); ++i) ++mine[1 + std::min(2, static_cast<int>(p.kind[i]))];
+      MPI_Gather(mine, 4, MPI_UNSIGNED_LONG_LONG, all.data(), 4, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+      for (std::size_t q = 0; rank == 0 && q < static_cast<std::size_t>(n_ranks); ++q)
+        fmt::print("rank {}: {} owned ({} fluid, {} wall, {} dummy)\n", q, all[4 * q], all[4 * q + 1], all[4 * q + 2],
+                   all[4 * q + 3]);
+    }
     if (rank == 0) {
       fmt::print("dam break dp {} m, {} particles ({} fluid), {} rank(s), preconditioner {}, tolerance {:.0e}, {} steps to t = {:.4f} s\n",
                  dp, n_particles, n_fluid, n_ranks, prec, spec.fluid.tolerance, n_steps, t);
+      fmt::print("owners and ghosts renewed {} times in {} steps ({} partition)\n", dist.stats().n_ghost_builds, n_steps,
+                 name_of(partition_method_names(), ds.method));
       fmt::print("| ranks | particles | neighbours | assembly | prec. setup | solve (it) | halo | rest | total ms/step | peak MiB/rank | ghosts/rank | halo KiB/rank/step |\n");
       fmt::print("| {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} ({:.1f}) | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.0f} | {:.1f} |\n", n_ranks,
                  n_particles, phases[0] * ms, phases[1] * ms, phases[2] * ms, phases[3] * ms,

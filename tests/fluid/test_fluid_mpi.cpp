@@ -33,13 +33,14 @@ int main(int argc, char** argv) {
     ParticleSet& pd = dist_scene.particles;
     Distribution self(MPI_COMM_SELF, {});
     DistributionSettings settings;
-    settings.halo_width = fluid_interaction_radius(fluid_setup(spec)) + spec.dp;
+    settings.skin = 0.02 * spec.dp;  // small: owners and ghosts renewed every few steps, refreshed in between
+    settings.halo_width = fluid_interaction_radius(fluid_setup(spec)) + settings.skin;
     Distribution world(MPI_COMM_WORLD, settings);
     world.distribute_replicated(pd);
     FluidSolver serial(fluid_setup(spec), ps, self);
     FluidSolver dist(fluid_setup(spec), pd, world);
     Real t = 0;
-    for (int step = 0; step < 5; ++step) {
+    for (int step = 0; step < 20; ++step) {
       const Real dt = serial.stable_dt();
       const Real dt_dist = dist.stable_dt();
       serial.advance(t, dt);
