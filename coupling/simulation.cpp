@@ -210,6 +210,18 @@ class RunLoop {
     summary_.wall_seconds = seconds_since(t_start);
     summary_.peak_memory_kib = peak_memory_kib();
     if (n_ranks_ > 1) MPI_Allreduce(MPI_IN_PLACE, &summary_.peak_memory_kib, 1, MPI_LONG, MPI_MAX, comm_);
+    summary_.n_ranks = n_ranks_;
+    if (n_ranks_ > 1) {
+      unsigned long long owned[2] = {p_.n_owned(), ~static_cast<unsigned long long>(p_.n_owned())};
+      MPI_Allreduce(MPI_IN_PLACE, owned, 2, MPI_UNSIGNED_LONG_LONG, MPI_MAX, comm_);
+      summary_.owned_max = owned[0];
+      summary_.owned_min = ~owned[1];
+      const DistributionStats& d = dist_->stats();
+      double t = d.t_partition + d.t_migrate + d.t_halo;
+      MPI_Allreduce(MPI_IN_PLACE, &t, 1, MPI_DOUBLE, MPI_MAX, comm_);
+      summary_.t_halo = t;
+      summary_.n_partitions = d.n_partitions;
+    }
     if (rank_ == 0)
       jsonl_ << fmt::format(
           "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
@@ -852,6 +864,9 @@ std::string format_summary(const RunSummary& s) {
       s.n_steps, s.end_time, format_duration(s.wall_seconds), s.wall_seconds, s.t_fluid, 100 * s.t_fluid / wall,
       s.t_solid, 100 * s.t_solid / wall, coupling, s.t_output, 100 * s.t_output / wall, other,
       static_cast<double>(s.peak_memory_kib) / 1024);
+  if (s.n_ranks > 1)
+    text += fmt::format("\n  {} ranks: {} to {} particles owned, {} partition(s), owners and ghosts {:.2f} s", s.n_ranks,
+                        s.owned_min, s.owned_max, s.n_partitions, s.t_halo);
   if (s.last_subcycles > 1) text += fmt::format("\n  subcycles {} (solid dt {:.3e} s)", s.last_subcycles, s.last_solid_dt);
   if (s.n_subcycles_raised > 0)
     text += fmt::format("\n  the requested subcycles were raised to the solid's limit in {} step(s)", s.n_subcycles_raised);

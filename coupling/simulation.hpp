@@ -46,7 +46,11 @@ struct RunSummary {
   double t_fluid = 0, t_solid = 0, t_output = 0;
   double t_coupling = 0;        ///< interface: surface flags, eq. 50 loads (coupled runs)
   std::size_t n_removed = 0;    ///< fluid particles removed because they left the domain
-  long peak_memory_kib = 0;     ///< peak resident memory of the process
+  long peak_memory_kib = 0;     ///< peak resident memory of the largest process
+  int n_ranks = 1;
+  std::size_t owned_min = 0, owned_max = 0;  ///< owned particles of the least and most loaded rank at the end
+  double t_halo = 0;            ///< owners, ghosts, their refreshes and partitions (the slowest rank) [s]
+  int n_partitions = 0;
   int last_subcycles = 1;
   std::size_t n_subcycles_raised = 0;  ///< steps where the requested subcycles were raised to the solid limit
   Real last_solid_dt = 0;
