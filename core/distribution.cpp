@@ -589,6 +589,32 @@ std::vector<ParticleSet::RealArray> resolve(ParticleSet& p, const std::vector<st
 }
 }  // namespace
 
+namespace {
+/// Sends send_buf[q] to every rank q with a non-empty buffer and receives recv_buf[q] (already sized) from
+/// every rank q with a non-empty one; returns the bytes sent.
+std::size_t swap_buffers(MPI_Comm comm, const int tag, const std::vector<std::vector<Real>>& send_buf,
+                         std::vector<std::vector<Real>>& recv_buf) {
+  std::vector<MPI_Request> requests;
+  requests.reserve(send_buf.size() + recv_buf.size());
+  std::size_t bytes = 0;
+  for (std::size_t q = 0; q < recv_buf.size(); ++q) {
+    if (recv_buf[q].empty()) continue;
+    requests.emplace_back();
+    MPI_Irecv(recv_buf[q].data(), to_int(recv_buf[q].size()), MPI_DOUBLE, static_cast<int>(q), tag, comm,
+              &requests.back());
+  }
+  for (std::size_t q = 0; q < send_buf.size(); ++q) {
+    if (send_buf[q].empty()) continue;
+    bytes += send_buf[q].size() * sizeof(Real);
+    requests.emplace_back();
+    MPI_Isend(send_buf[q].data(), to_int(send_buf[q].size()), MPI_DOUBLE, static_cast<int>(q), tag, comm,
+              &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  return bytes;
+}
+}  // namespace
+
 void Distribution::exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields) {
   const auto t0 = Clock::now();
   int width = 0;
@@ -600,27 +626,17 @@ void Distribution::exchange_ghosts(ParticleSet& p, const std::vector<std::string
   const auto P = static_cast<std::size_t>(n_ranks_);
   const std::size_t first_ghost = p.n_owned();
   std::vector<std::vector<Real>> send_buf(P), recv_buf(P);
-  std::vector<MPI_Request> requests;
   for (std::size_t q = 0; q < P; ++q) {
-    if (m.recv_count[q] == 0) continue;
     recv_buf[q].resize(m.recv_count[q] * static_cast<std::size_t>(width));
-    requests.emplace_back();
-    MPI_Irecv(recv_buf[q].data(), to_int(recv_buf[q].size()), MPI_DOUBLE, static_cast<int>(q), 2, m.comm,
-              &requests.back());
-  }
-  for (std::size_t q = 0; q < P; ++q) {
-    if (m.send_index[q].empty()) continue;
     auto& buf = send_buf[q];
     buf.reserve(m.send_index[q].size() * static_cast<std::size_t>(width));
     for (const LocalIndex i : m.send_index[q])
       for (const auto& a : arrays)
         for (int c = 0; c < a.components; ++c) buf.push_back(a.data[static_cast<std::size_t>(i) * a.components + c]);
-    stats_.halo_bytes += buf.size() * sizeof(Real);
-    stats_.halo_bytes_total += buf.size() * sizeof(Real);
-    requests.emplace_back();
-    MPI_Isend(buf.data(), to_int(buf.size()), MPI_DOUBLE, static_cast<int>(q), 2, m.comm, &requests.back());
   }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  const std::size_t bytes = swap_buffers(m.comm, 2, send_buf, recv_buf);
+  stats_.halo_bytes += bytes;
+  stats_.halo_bytes_total += bytes;
   for (std::size_t q = 0; q < P; ++q) {
     const Real* src = recv_buf[q].data();
     for (std::size_t k = 0; k < m.recv_count[q]; ++k) {
@@ -643,17 +659,9 @@ void Distribution::reverse_sum(ParticleSet& p, const std::vector<std::string>& f
   const auto P = static_cast<std::size_t>(n_ranks_);
   const std::size_t first_ghost = p.n_owned();
   std::vector<std::vector<Real>> send_buf(P), recv_buf(P);
-  std::vector<MPI_Request> requests;
   // The plan reversed: ghosts' values go back to their owners, who receive one value per sent particle.
   for (std::size_t q = 0; q < P; ++q) {
-    if (m.send_index[q].empty()) continue;
     recv_buf[q].resize(m.send_index[q].size() * static_cast<std::size_t>(width));
-    requests.emplace_back();
-    MPI_Irecv(recv_buf[q].data(), to_int(recv_buf[q].size()), MPI_DOUBLE, static_cast<int>(q), 3, m.comm,
-              &requests.back());
-  }
-  for (std::size_t q = 0; q < P; ++q) {
-    if (m.recv_count[q] == 0) continue;
     auto& buf = send_buf[q];
     buf.reserve(m.recv_count[q] * static_cast<std::size_t>(width));
     for (std::size_t k = 0; k < m.recv_count[q]; ++k) {
@@ -664,12 +672,10 @@ void Distribution::reverse_sum(ParticleSet& p, const std::vector<std::string>& f
           a.data[g * a.components + c] = 0;
         }
     }
-    stats_.halo_bytes += buf.size() * sizeof(Real);
-    stats_.halo_bytes_total += buf.size() * sizeof(Real);
-    requests.emplace_back();
-    MPI_Isend(buf.data(), to_int(buf.size()), MPI_DOUBLE, static_cast<int>(q), 3, m.comm, &requests.back());
   }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  const std::size_t bytes = swap_buffers(m.comm, 3, send_buf, recv_buf);
+  stats_.halo_bytes += bytes;
+  stats_.halo_bytes_total += bytes;
   for (std::size_t q = 0; q < P; ++q) {  // in rank order: the sums come out the same on every run
     const Real* src = recv_buf[q].data();
     for (const LocalIndex i : m.send_index[q])

@@ -113,30 +113,27 @@ const std::vector<Vec>& ParticleSet::vector_field(const std::string& name) const
   return find_field(vector_fields_, name);
 }
 
+template <class Self, class F>
+void ParticleSet::for_each_array_of(Self& self, F&& f) {
+  f(self.position);
+  f(self.velocity);
+  f(self.kind);
+  f(self.body);
+  f(self.material);
+  f(self.clamped);
+  f(self.global_id);
+  for (auto& [name, a] : self.scalar_fields_) f(a);
+  for (auto& [name, a] : self.vector_fields_) f(a);
+}
+
 template <class F>
 void ParticleSet::for_each_array(F&& f) {
-  f(position);
-  f(velocity);
-  f(kind);
-  f(body);
-  f(material);
-  f(clamped);
-  f(global_id);
-  for (auto& [name, a] : scalar_fields_) f(a);
-  for (auto& [name, a] : vector_fields_) f(a);
+  for_each_array_of(*this, f);
 }
 
 template <class F>
 void ParticleSet::for_each_array(F&& f) const {
-  f(position);
-  f(velocity);
-  f(kind);
-  f(body);
-  f(material);
-  f(clamped);
-  f(global_id);
-  for (const auto& [name, a] : scalar_fields_) f(a);
-  for (const auto& [name, a] : vector_fields_) f(a);
+  for_each_array_of(*this, f);
 }
 
 static_assert(sizeof(Vec) == dim * sizeof(Real), "Vec must be dim contiguous reals (packing, real_array)");

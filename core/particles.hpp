@@ -123,6 +123,9 @@ class ParticleSet {
   void for_each_array(F&& f);
   template <class F>
   void for_each_array(F&& f) const;
+  /// The one list of the arrays, for both of the above.
+  template <class Self, class F>
+  static void for_each_array_of(Self& self, F&& f);
   void unpack(const char* data, std::size_t n);
 
   std::size_t n_ghost_ = 0;

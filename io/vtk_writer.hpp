@@ -61,9 +61,6 @@ class VtkSeriesWriter {
   void write_pvd() const;
   std::string frame_file_name(std::size_t frame) const;
   std::string piece_file_name(std::size_t frame, int piece) const;
-  /// Point arrays of the last piece: (name, VTK type name, components), for the .pvtu.
-  std::vector<std::tuple<std::string, std::string, int>> arrays_;
-  int piece_ = 0, n_pieces_ = 1;
 
   std::string directory_;
   std::string basename_;
@@ -71,6 +68,9 @@ class VtkSeriesWriter {
   std::vector<std::string> fields_;
   std::vector<std::pair<double, std::string>> frames_;  ///< (time, .vtu name relative to the .pvd)
   std::size_t next_frame_ = 0;                          ///< number in the next .vtu file name
+  /// Point arrays of the last piece: (name, VTK type name, components), for the .pvtu.
+  std::vector<std::tuple<std::string, std::string, int>> arrays_;
+  int piece_ = 0, n_pieces_ = 1;
 };
 
 /// Read-side helper for tests and tools: the (time, file) entries of a .pvd, in file order; file

@@ -405,11 +405,3 @@ INSTANTIATE_TEST_SUITE_P(Methods, DistributionMethod,
                          [](const ::testing::TestParamInfo<PartitionMethod>& info) {
                            return std::string(name_of(partition_method_names(), info.param));
                          });
-
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  const int result = RUN_ALL_TESTS();
-  MPI_Finalize();
-  return result;
-}

@@ -18,6 +18,7 @@
 #include <vtkVariant.h>
 #include <vtkXMLDataElement.h>
 #include <vtkXMLDataParser.h>
+#include <vtkXMLPUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include <unistd.h>
@@ -246,6 +247,40 @@ TEST_F(VtkWriterTest, ThreeFramesRoundTripExactly) {
     EXPECT_STREQ(ds->GetAttribute("part"), "0");
   }
 
+  expect_no_tmp_files(dir_);
+}
+
+// Two pieces of a frame (as two ranks write them): each piece holds its owned particles only, the .pvtu
+// names both, VTK's parallel reader gives back every particle with its arrays, and the .pvd lists the .pvtu.
+TEST_F(VtkWriterTest, PiecesAndParallelFileReadBackAsOneFrame) {
+  ParticleSet a = random_particles(3, 120), b = random_particles(4, 80);
+  VtkSeriesWriter w0(dir_.string(), "particles", 0, 2), w1(dir_.string(), "particles", 1, 2);
+  EXPECT_EQ(w0.write_piece(a, 0.5), (dir_ / "particles_000000_0.vtu").string());
+  EXPECT_EQ(w1.write_piece(b, 0.5), (dir_ / "particles_000000_1.vtu").string());
+  EXPECT_EQ(w1.commit_frame(0.5), (dir_ / "particles_000000.pvtu").string());
+  EXPECT_FALSE(fs::exists(dir_ / "particles_000000.pvtu"));  // piece 0 writes it
+  EXPECT_EQ(w0.commit_frame(0.5), (dir_ / "particles_000000.pvtu").string());
+  expect_frame((dir_ / "particles_000000_1.vtu").string(), b, 0.5, {"density", "pressure"}, {"displacement"});
+  vtkNew<vtkXMLPUnstructuredGridReader> reader;
+  reader->SetFileName((dir_ / "particles_000000.pvtu").c_str());
+  reader->Update();
+  vtkUnstructuredGrid* const grid = reader->GetOutput();
+  ASSERT_EQ(grid->GetNumberOfPoints(), 200);
+  vtkDataArray* const gid = grid->GetPointData()->GetArray("global_id");
+  vtkDataArray* const pressure = grid->GetPointData()->GetArray("pressure");
+  ASSERT_NE(gid, nullptr);
+  ASSERT_NE(pressure, nullptr);
+  for (vtkIdType k = 0; k < 200; ++k) {
+    const ParticleSet& p = k < 120 ? a : b;
+    const auto i = static_cast<std::size_t>(k < 120 ? k : k - 120);
+    EXPECT_EQ(gid->GetVariantValue(k).ToLongLong(), p.global_id[i]);
+    EXPECT_EQ(pressure->GetTuple1(k), p.scalar_field("pressure")[i]);
+    EXPECT_EQ(grid->GetPoint(k)[0], p.position[i][0]);
+  }
+  const auto entries = read_pvd(w0.pvd_path());
+  ASSERT_EQ(entries.size(), 1u);
+  EXPECT_EQ(entries[0].second, "particles_000000.pvtu");
+  EXPECT_EQ(w1.next_frame(), 1u);
   expect_no_tmp_files(dir_);
 }
 

@@ -1,4 +1,5 @@
-// main() of the fluid tests: MPI is initialized around the GoogleTest run (the pressure solver needs it).
+// main() of the tests that need MPI (the pressure solver, the distribution): MPI is initialized around the
+// GoogleTest run.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
