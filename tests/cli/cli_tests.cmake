@@ -32,6 +32,11 @@ add_test(NAME cli_mpi_input_error_printed_once
          COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml|--set|dp=0"
                  -DCODE=2 "-DREGEX=dp = 0: expected a positive number" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
 set_tests_properties(cli_mpi_input_error_printed_once PROPERTIES LABELS mpi)
+# Under mpirun `check` reports once (rank 0's report).
+add_test(NAME cli_mpi_check_reports_once
+         COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml"
+                 -DCODE=0 "-DREGEX=case OK" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
+set_tests_properties(cli_mpi_check_reports_once PROPERTIES LABELS mpi)
 # All ranks take the same decision on the memory (the smallest MemAvailable of any rank): one message, exit 2.
 add_test(NAME cli_mpi_memory_refused_on_every_rank
          COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml|--dp|1e-5"
