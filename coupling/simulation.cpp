@@ -454,6 +454,11 @@ class RunLoop {
     last_step_start_ = Clock::now();  // the step's time without the copy
     if (step_seconds_ > 0)
       copy_every_ = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(copy_seconds / (0.02 * step_seconds_))));
+    if (n_ranks_ > 1) {  // every rank copies at the same steps: a failure writes one state of all pieces
+      unsigned long long every = copy_every_;
+      MPI_Allreduce(MPI_IN_PLACE, &every, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, comm_);
+      copy_every_ = every;
+    }
   }
 
   /// A step that threw on this rank: on one rank, fail(); on several, the other ranks may be waiting in a
