@@ -512,8 +512,6 @@ void Distribution::build_ghosts(ParticleSet& p) {
   m.x_at_plan.assign(p.position.begin(), p.position.begin() + static_cast<std::ptrdiff_t>(p.n_owned()));
   m.plan_ghost = 0;
   m.have_plan = true;
-  stats_.halo_bytes = 0;
-  stats_.n_ghosts = 0;
   if (n_ranks_ == 1) {
     stats_.t_halo += seconds_since(t0);
     return;
@@ -563,7 +561,6 @@ void Distribution::build_ghosts(ParticleSet& p) {
     if (m.send_index[q].empty()) continue;
     p.pack(m.send_index[q], send_buf[q]);
     stats_.halo_bytes += send_buf[q].size();
-    stats_.halo_bytes_total += send_buf[q].size();
     requests.emplace_back();
     MPI_Isend(send_buf[q].data(), to_int(send_buf[q].size()), MPI_BYTE, static_cast<int>(q), 1, m.comm,
               &requests.back());
@@ -573,7 +570,6 @@ void Distribution::build_ghosts(ParticleSet& p) {
     if (m.recv_count[q] > 0) p.unpack_ghosts(recv_buf[q].data(), m.recv_count[q]);
   m.plan_ghost = offset;
   assert(p.n_ghost() == offset && p.n_owned() == m.plan_owned);
-  stats_.n_ghosts = offset;
   stats_.t_halo += seconds_since(t0);
 }
 
@@ -616,71 +612,57 @@ std::size_t swap_buffers(MPI_Comm comm, const int tag, const std::vector<std::ve
 }  // namespace
 
 void Distribution::exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields) {
-  const auto t0 = Clock::now();
-  int width = 0;
-  const auto arrays = resolve(p, fields, width);
-  if (n_ranks_ == 1 || fields.empty()) return;
-  Impl& m = *impl_;
-  assert(m.have_plan && p.n_owned() == m.plan_owned && p.n_ghost() == m.plan_ghost &&
-         "exchange_ghosts needs the set of the last build_ghosts()");
-  const auto P = static_cast<std::size_t>(n_ranks_);
-  const std::size_t first_ghost = p.n_owned();
-  std::vector<std::vector<Real>> send_buf(P), recv_buf(P);
-  for (std::size_t q = 0; q < P; ++q) {
-    recv_buf[q].resize(m.recv_count[q] * static_cast<std::size_t>(width));
-    auto& buf = send_buf[q];
-    buf.reserve(m.send_index[q].size() * static_cast<std::size_t>(width));
-    for (const LocalIndex i : m.send_index[q])
-      for (const auto& a : arrays)
-        for (int c = 0; c < a.components; ++c) buf.push_back(a.data[static_cast<std::size_t>(i) * a.components + c]);
-  }
-  const std::size_t bytes = swap_buffers(m.comm, 2, send_buf, recv_buf);
-  stats_.halo_bytes += bytes;
-  stats_.halo_bytes_total += bytes;
-  for (std::size_t q = 0; q < P; ++q) {
-    const Real* src = recv_buf[q].data();
-    for (std::size_t k = 0; k < m.recv_count[q]; ++k) {
-      const std::size_t g = first_ghost + m.recv_offset[q] + k;
-      for (const auto& a : arrays)
-        for (int c = 0; c < a.components; ++c) a.data[g * a.components + c] = *src++;
-    }
-  }
-  stats_.t_halo += seconds_since(t0);
+  transfer(p, fields, false);
 }
 
-void Distribution::reverse_sum(ParticleSet& p, const std::vector<std::string>& fields) {
+void Distribution::reverse_sum(ParticleSet& p, const std::vector<std::string>& fields) { transfer(p, fields, true); }
+
+void Distribution::transfer(ParticleSet& p, const std::vector<std::string>& fields, const bool to_owners) {
   const auto t0 = Clock::now();
   int width = 0;
   const auto arrays = resolve(p, fields, width);
   if (n_ranks_ == 1 || fields.empty()) return;
   Impl& m = *impl_;
   assert(m.have_plan && p.n_owned() == m.plan_owned && p.n_ghost() == m.plan_ghost &&
-         "reverse_sum needs the set of the last build_ghosts()");
+         "exchange_ghosts and reverse_sum need the set of the last build_ghosts()");
   const auto P = static_cast<std::size_t>(n_ranks_);
   const std::size_t first_ghost = p.n_owned();
+  // The particles shared with rank q: my owned ones it holds as ghosts, or my ghosts of its particles.
+  const auto count = [&](const std::size_t q, const bool ghosts) {
+    return ghosts ? m.recv_count[q] : m.send_index[q].size();
+  };
+  const auto each = [&](const std::size_t q, const bool ghosts, auto&& f) {
+    if (ghosts)
+      for (std::size_t k = 0; k < m.recv_count[q]; ++k) f(first_ghost + m.recv_offset[q] + k);
+    else
+      for (const LocalIndex i : m.send_index[q]) f(static_cast<std::size_t>(i));
+  };
+  // Owners to ghosts (values replaced), or ghosts back to their owners (values added, ghosts zeroed).
+  const bool send_ghosts = to_owners;
   std::vector<std::vector<Real>> send_buf(P), recv_buf(P);
-  // The plan reversed: ghosts' values go back to their owners, who receive one value per sent particle.
   for (std::size_t q = 0; q < P; ++q) {
-    recv_buf[q].resize(m.send_index[q].size() * static_cast<std::size_t>(width));
+    recv_buf[q].resize(count(q, !send_ghosts) * static_cast<std::size_t>(width));
     auto& buf = send_buf[q];
-    buf.reserve(m.recv_count[q] * static_cast<std::size_t>(width));
-    for (std::size_t k = 0; k < m.recv_count[q]; ++k) {
-      const std::size_t g = first_ghost + m.recv_offset[q] + k;
+    buf.reserve(count(q, send_ghosts) * static_cast<std::size_t>(width));
+    each(q, send_ghosts, [&](const std::size_t i) {
       for (const auto& a : arrays)
         for (int c = 0; c < a.components; ++c) {
-          buf.push_back(a.data[g * a.components + c]);
-          a.data[g * a.components + c] = 0;
+          Real& v = a.data[i * a.components + c];
+          buf.push_back(v);
+          if (to_owners) v = 0;
         }
-    }
+    });
   }
-  const std::size_t bytes = swap_buffers(m.comm, 3, send_buf, recv_buf);
-  stats_.halo_bytes += bytes;
-  stats_.halo_bytes_total += bytes;
+  stats_.halo_bytes += swap_buffers(m.comm, to_owners ? 3 : 2, send_buf, recv_buf);
   for (std::size_t q = 0; q < P; ++q) {  // in rank order: the sums come out the same on every run
     const Real* src = recv_buf[q].data();
-    for (const LocalIndex i : m.send_index[q])
+    each(q, !send_ghosts, [&](const std::size_t i) {
       for (const auto& a : arrays)
-        for (int c = 0; c < a.components; ++c) a.data[static_cast<std::size_t>(i) * a.components + c] += *src++;
+        for (int c = 0; c < a.components; ++c) {
+          Real& v = a.data[i * a.components + c];
+          v = to_owners ? v + *src++ : *src++;
+        }
+    });
   }
   stats_.t_halo += seconds_since(t0);
 }

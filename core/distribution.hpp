@@ -55,12 +55,10 @@ struct Box {
   Real distance(const Vec& x) const;
 };
 
-/// Counters of the last operations, for the run log (this rank's values).
+/// Counters for the run log and the benchmarks (this rank's values).
 struct DistributionStats {
   std::size_t n_migrated_out = 0;   ///< particles sent by the last migrate()
-  std::size_t n_ghosts = 0;         ///< ghosts held after the last build_ghosts()
-  std::size_t halo_bytes = 0;       ///< bytes sent by this rank in the last build_ghosts() + exchanges since
-  std::size_t halo_bytes_total = 0; ///< bytes sent by this rank in all build_ghosts() and exchanges
+  std::size_t halo_bytes = 0;       ///< bytes sent by this rank in all build_ghosts() and exchanges so far
   int n_partitions = 0;             ///< partitions computed so far
   int n_ghost_builds = 0;           ///< build_ghosts() calls so far
   double t_partition = 0, t_migrate = 0, t_halo = 0;  ///< seconds, accumulated
@@ -133,6 +131,9 @@ class Distribution {
   const DistributionStats& stats() const { return stats_; }
 
  private:
+  /// exchange_ghosts (to_owners false) and reverse_sum (true) over the plan of the last build_ghosts().
+  void transfer(ParticleSet& p, const std::vector<std::string>& fields, bool to_owners);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   MPI_Comm comm_ = MPI_COMM_NULL;

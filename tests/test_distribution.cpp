@@ -240,7 +240,11 @@ TEST_P(DistributionMethod, GhostsGiveTheOneRankNumberDensity) {
   ParticleSet p = full;
   d.distribute_replicated(p);
   d.build_ghosts(p);
-  EXPECT_EQ(d.stats().n_ghosts, p.n_ghost());
+  // Each ghost's owner is another rank, whose region holds it.
+  for (std::size_t k = 0; k < p.n_ghost(); ++k) {
+    EXPECT_NE(d.ghost_owner(k), d.rank());
+    EXPECT_EQ(d.ghost_owner(k), d.owner_of(p.position[p.n_owned() + k]));
+  }
   if (world_size() == 1) {
     EXPECT_EQ(p.n_ghost(), 0u);
   }

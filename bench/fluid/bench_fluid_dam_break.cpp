@@ -57,8 +57,8 @@ int main(int argc, char** argv) {
       sum.t_halo += r.t_halo;
       sum.t_rest += r.t_rest;
       iterations += r.iterations;
-      halo_bytes = dist.stats().halo_bytes_total;
-      ghosts += dist.stats().n_ghosts;
+      halo_bytes = dist.stats().halo_bytes;
+      ghosts += p.n_ghost();
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     rusage usage{};
