@@ -105,7 +105,7 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t, MPI_
     }
   }
   int size = 1;
-  if (comm != MPI_COMM_SELF) MPI_Comm_size(comm, &size);  // (one process needs no MPI: unit tests)
+  MPI_Comm_size(comm, &size);
   if (size > 1) {
     MPI_Allreduce(MPI_IN_PLACE, sums.data(), static_cast<int>(sums.size()), MPI_DOUBLE, MPI_SUM, comm);
     MPI_Allreduce(MPI_IN_PLACE, maxima.data(), static_cast<int>(maxima.size()), MPI_DOUBLE, MPI_MAX, comm);
