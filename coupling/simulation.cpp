@@ -265,10 +265,11 @@ class RunLoop {
         raised_said_ = true;
       }
     }
-    if (n_ranks_ > 1) {  // rank 0, which holds any solid, decides the step for all
-      MPI_Bcast(&dt, 1, MPI_DOUBLE, 0, comm_);
-      MPI_Bcast(&n_sub, 1, MPI_INT, 0, comm_);
-      limit = agreed_message(comm_, rank_ == 0 ? limit : std::string());
+    if (n_ranks_ > 1) {  // rank 0, which holds any solid, decides the step for all (and alone logs its limit)
+      Real step[2] = {dt, static_cast<Real>(n_sub)};
+      MPI_Bcast(step, 2, MPI_DOUBLE, 0, comm_);
+      dt = step[0];
+      n_sub = static_cast<int>(step[1]);
     }
     if (n_ranks_ > 1 && !has_solid_ && step_ % repartition_every == 0) {
       const auto t0 = Clock::now();
@@ -403,14 +404,8 @@ class RunLoop {
   /// Before the first step: the number of steps the run needs at its first dt (and the solid's sub-steps),
   /// with a warning when that cannot finish in any sensible time.
   void report_projection() {
-    if (n_ranks_ > 1) {  // the counts are sums over the ranks (a collective)
-      const RunProjection r = project_run(spec_, p_, t_, comm_);
-      if (log_) fmt::print("{}\n", r.text());
-      std::fflush(stdout);
-      return;
-    }
+    const RunProjection r = project_run(spec_, p_, t_, comm_);  // counts summed over the ranks (a collective)
     if (!log_) return;
-    const RunProjection r = project_run(spec_, p_, t_, comm_);
     fmt::print("{}\n", r.text());
     std::fflush(stdout);
   }
