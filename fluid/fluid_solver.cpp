@@ -323,8 +323,7 @@ struct FluidSolver::Impl {
     sys.value.resize(m);
   }
 
-  /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient; the
-  /// ghosts get their owners' pressure.
+  /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient.
   PressureSolveResult solve_pressure() {
     auto& pressure = p.scalar_field(fluid_fields::pressure);
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
@@ -340,7 +339,6 @@ struct FluidSolver::Impl {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       pressure[i] = surface[i] != 0 ? 0.0 : std::max(x_own[r], 0.0);
     }
-    dist.exchange_ghosts(p, {fluid_fields::pressure});
     return res;
   }
 
@@ -553,6 +551,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
         "time.dt_max) and check the run's earlier steps",
         dt, m.rho / (dt * dt)));
   const PressureSolveResult res = m.solve_pressure();
+  m.refresh_ghosts({fluid_fields::pressure}, report);
   report.t_assembly += res.t_matrix;
   report.t_setup = res.t_setup;
   report.t_solve = res.t_solve;
