@@ -616,7 +616,7 @@ class RunLoop {
     receivers_.save_state(w);
   }
 
-  /// Writes checkpoint_<t>.chk into the output folder (rank 0, which holds the same state as every rank);
+  /// Writes checkpoint_<t>.chk into the output folder (rank 0, from every rank's particles gathered there);
   /// a failure stops the run on every rank.
   void write_checkpoint_now() {
     try {
@@ -716,6 +716,10 @@ class RunLoop {
                  "(fluid.preconditioner_rebuild_every > 1) cannot be rebuilt here (it was saved on several ranks, or "
                  "the setting changed) and is set up anew: the continuation agrees with the original run to the "
                  "solver tolerance, not bit for bit\n");
+    if (c.info.n_ranks != n_ranks_ && log_)
+      fmt::print("note: the checkpoint was written on {} rank(s), this run has {}: the particles are partitioned anew "
+                 "and the continuation agrees with the original run to the solver tolerance, not bit for bit\n",
+                 c.info.n_ranks, n_ranks_);
     on_rank0(comm_, [&] {
       if (settings_.continue_series)
         writer_.adopt_existing(t_, c.info.next_frame);
