@@ -260,10 +260,10 @@ bool extend_to_infinity(std::vector<Box>& boxes) {
 /// Regions from Zoltan2 on the points given by each rank, or (no points at all, or a degenerate partition
 /// whose boxes cannot tile space) rank 0 owning all space. Collective.
 std::vector<Box> compute_regions(MPI_Comm comm, const int n_ranks, const PartitionMethod method, const Vec* x,
-                                 const GlobalId* gid, const Real* w, const std::size_t n, const bool all_on_rank0) {
+                                 const GlobalId* gid, const Real* w, const std::size_t n) {
   std::vector<Box> fallback(static_cast<std::size_t>(n_ranks), empty_box());
   fallback[0] = all_space();
-  if (n_ranks == 1 || all_on_rank0) return fallback;
+  if (n_ranks == 1) return fallback;
   unsigned long long local = n, total = 0;
   MPI_Allreduce(&local, &total, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
   if (total == 0) return fallback;
@@ -293,7 +293,7 @@ void Distribution::partition(ParticleSet& p, const std::vector<Real>& weights) {
   check_positions(impl_->comm, p, n);
   check_weights(impl_->comm, p, weights, 0, n);
   regions_ = compute_regions(impl_->comm, n_ranks_, settings_.method, p.position.data(), p.global_id.data(),
-                                     weights.empty() ? nullptr : weights.data(), n, settings_.all_on_rank0);
+                                     weights.empty() ? nullptr : weights.data(), n);
   ++stats_.n_partitions;
   stats_.t_partition += seconds_since(t0);
   migrate(p);
@@ -319,7 +319,7 @@ void Distribution::distribute_replicated(ParticleSet& p, const std::vector<Real>
   if (!weights.empty()) check_weights(impl_->comm, p, weights, 0, n_all);
   regions_ = compute_regions(impl_->comm, n_ranks_, settings_.method, p.position.data() + first,
                                      p.global_id.data() + first, weights.empty() ? nullptr : weights.data() + first,
-                                     last - first, settings_.all_on_rank0);
+                                     last - first);
   ++stats_.n_partitions;
   if (n_ranks_ > 1) {
     std::vector<std::uint8_t> remove(n_all);

@@ -41,8 +41,6 @@ struct DistributionSettings {
   Real skin = 0;
   /// Re-partition when (largest owned work) / (mean owned work) - 1 passes this.
   Real imbalance_threshold = 0.1;
-  /// Every particle on rank 0, the other ranks' regions empty: for modules not distributed yet (the solid).
-  bool all_on_rank0 = false;
 };
 
 /// An axis-aligned box; the outer faces of a partition's boxes are +-infinity. It holds the points with

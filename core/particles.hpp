@@ -65,6 +65,8 @@ class ParticleSet {
   void reserve(std::size_t n);
 
   /// Register an extra per-particle field (idempotent). References stay valid while fields are added.
+  /// A name starting with '_' marks a module's internal field: stored, moved between ranks and checkpointed
+  /// like any other, but not written to the output unless asked for by name.
   std::vector<Real>& add_scalar_field(const std::string& name, Real initial = 0);
   std::vector<Vec>& add_vector_field(const std::string& name, const Vec& initial = Vec::Zero());
   bool has_scalar_field(const std::string& name) const { return scalar_fields_.count(name) != 0; }

@@ -2,6 +2,7 @@
 #include "coupling/fsi_interface.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/distribution.hpp"
 #include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "core/operators.hpp"
@@ -29,8 +30,23 @@ SubcycleChoice choose_subcycles(const int requested, const Real dt_fluid, const 
   return c;
 }
 
-FsiInterface::FsiInterface(const CaseSpec& spec, ParticleSet& particles, const FsiOptions& options)
-    : p_(particles), opt_(options) {
+namespace {
+/// The interface's internal per-particle fields (not written unless asked for; they travel between ranks and
+/// into checkpoints with their particle).
+namespace field {
+constexpr const char* n0_solid = "_fsi_n0_solid";      ///< (n_i^0)_solid of eq. 51
+constexpr const char* prev_load = "_fsi_prev_load";    ///< the load applied in the previous step
+constexpr const char* had_load = "_fsi_had_load";      ///< 1: prev_load holds a load (the particle was wetted)
+constexpr const char* mean_v = "_fsi_mean_v";          ///< the solid's mean velocity over the last step
+constexpr const char* saved_x = "_fsi_saved_x";        ///< the solid's own state during the fluid step
+constexpr const char* saved_v = "_fsi_saved_v";
+constexpr const char* start_x = "_fsi_start_x";        ///< the solid's position at the start of advance_solid
+}  // namespace field
+}  // namespace
+
+FsiInterface::FsiInterface(const CaseSpec& spec, ParticleSet& particles, const FsiOptions& options,
+                           Distribution* distribution)
+    : p_(particles), opt_(options), dist_(distribution) {
   dp_ = spec.dp;
   re_ = spec.fluid.re_gradient * spec.dp;
   n0_ = lattice_constants(dp_, re_).n0;
@@ -43,22 +59,60 @@ FluidOptions FsiInterface::fluid_options(const FsiOptions& options, FluidOptions
   return base;
 }
 
+void FsiInterface::sync() {
+  if (!dist_ || dist_->n_ranks() == 1) return;
+  if (dist_->needs_rebuild(p_)) {
+    p_.drop_ghosts();
+    dist_->migrate(p_);
+    dist_->build_ghosts(p_);
+  } else {
+    dist_->exchange_ghosts(p_, {"position", "velocity"});
+  }
+}
+
+void FsiInterface::reduce_bodies(const bool force) {
+  if (!dist_ || dist_->n_ranks() == 1 || bodies_.empty()) return;
+  std::vector<double> v;
+  for (const auto& b : bodies_) {
+    if (force) {
+      for (int a = 0; a < dim; ++a) v.push_back(b.force[a]);
+      v.push_back(static_cast<double>(b.n_wetted));
+    } else {
+      v.push_back(b.work_step);
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), MPI_DOUBLE, MPI_SUM, dist_->comm());
+  std::size_t q = 0;
+  for (auto& b : bodies_) {
+    if (force) {
+      for (int a = 0; a < dim; ++a) b.force[a] = v[q++];
+      b.n_wetted = static_cast<std::size_t>(v[q++]);
+    } else {
+      b.work_step = v[q++];
+    }
+  }
+}
+
 void FsiInterface::initialize() {
-  // (n_i^0)_solid: number density of each solid particle counting solid particles only (eq. 51).
+  for (const char* name : {field::n0_solid, field::had_load}) p_.add_scalar_field(name);
+  for (const char* name : {field::prev_load, field::mean_v, field::saved_x, field::saved_v, field::start_x})
+    p_.add_vector_field(name);
+  p_.add_vector_field(opt_.load_field);
+  if (opt_.freeze_solid_density) p_.add_scalar_field(opt_.offset_field);
+  sync();
+  // (n_i^0)_solid: number density of each solid particle counting solid particles only (eq. 51), over this
+  // rank's particles and ghosts.
   std::vector<Vec> xs;
-  std::vector<GlobalId> ids;
+  std::vector<LocalIndex> at;
   for (std::size_t i = 0; i < p_.size(); ++i)
     if (p_.kind[i] == ParticleKind::solid) {
       xs.push_back(p_.position[i]);
-      ids.push_back(p_.global_id[i]);
+      at.push_back(static_cast<LocalIndex>(i));
     }
   NeighbourList nl;
   build_neighbour_list(xs, re_, nl);
-  n0_solid_.clear();
-  n0_solid_.reserve(xs.size());
-  for (std::size_t k = 0; k < xs.size(); ++k) {
-    n0_solid_[ids[k]] = number_density_at(xs, nl, re_, k).n;
-  }
+  auto& n0_solid = p_.scalar_field(field::n0_solid);
+  for (std::size_t k = 0; k < xs.size(); ++k) n0_solid[static_cast<std::size_t>(at[k])] = number_density_at(xs, nl, re_, k).n;
   bodies_.clear();
   body_slot_.assign(p_.bodies.size(), -1);
   for (std::size_t b = 0; b < p_.bodies.size(); ++b)
@@ -69,8 +123,6 @@ void FsiInterface::initialize() {
       ib.body = static_cast<std::uint16_t>(b);
       bodies_.push_back(ib);
     }
-  p_.add_vector_field(opt_.load_field);
-  if (opt_.freeze_solid_density) p_.add_scalar_field(opt_.offset_field);
   initialized_ = true;
 }
 
@@ -78,18 +130,21 @@ void FsiInterface::prepare_fluid_boundary(const Real dt) {
   if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
   if (!p_.has_scalar_field(opt_.flag_field))
     throw std::logic_error("FsiInterface: the solid does not publish its surface flag '" + opt_.flag_field + "'");
-  saved_.clear();
-  if (opt_.midstep_predictor && dt > 0 && !mean_v_.empty()) {
-    for (std::size_t i = 0; i < p_.size(); ++i) {
+  predicted_ = opt_.midstep_predictor && dt > 0 && has_mean_v_;
+  if (predicted_) {
+    auto& saved_x = p_.vector_field(field::saved_x);
+    auto& saved_v = p_.vector_field(field::saved_v);
+    const auto& mean_v = p_.vector_field(field::mean_v);
+    for (std::size_t i = 0; i < p_.n_owned(); ++i) {
       if (p_.kind[i] != ParticleKind::solid) continue;
-      saved_.push_back({p_.global_id[i], p_.position[i], p_.velocity[i]});
-      const auto it = mean_v_.find(p_.global_id[i]);
-      const Vec u = it != mean_v_.end() ? it->second : Vec::Zero();
-      p_.position[i] += 0.5 * dt * u;
-      p_.velocity[i] = u;
+      saved_x[i] = p_.position[i];
+      saved_v[i] = p_.velocity[i];
+      p_.position[i] += 0.5 * dt * mean_v[i];
+      p_.velocity[i] = mean_v[i];
     }
   }
   if (!opt_.freeze_solid_density) return;
+  sync();  // the ghosts at their predicted positions
   solid_x_.clear();
   solid_i_.clear();
   for (std::size_t i = 0; i < p_.size(); ++i)
@@ -99,48 +154,52 @@ void FsiInterface::prepare_fluid_boundary(const Real dt) {
     }
   build_neighbour_list(solid_x_, re_, solid_nl_, solid_grid_);
   auto& offset = p_.scalar_field(opt_.offset_field);
+  const auto& n0_solid = p_.scalar_field(field::n0_solid);
   for (std::size_t k = 0; k < solid_x_.size(); ++k) {
     const auto i = static_cast<std::size_t>(solid_i_[k]);
-    offset[i] = n0_solid_.at(p_.global_id[i]) - number_density_at(solid_x_, solid_nl_, re_, k).n;
+    if (i >= p_.n_owned()) continue;
+    offset[i] = n0_solid[i] - number_density_at(solid_x_, solid_nl_, re_, k).n;
   }
+  if (dist_ && dist_->n_ranks() > 1) dist_->exchange_ghosts(p_, {opt_.offset_field});
 }
 
 void FsiInterface::restore_solid() {
-  if (saved_.empty()) return;
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p_.size() && k < saved_.size(); ++i) {
+  if (!predicted_) return;
+  // The saved state travelled with its particle if the fluid step moved it to another rank.
+  const auto& saved_x = p_.vector_field(field::saved_x);
+  const auto& saved_v = p_.vector_field(field::saved_v);
+  for (std::size_t i = 0; i < p_.n_owned(); ++i) {
     if (p_.kind[i] != ParticleKind::solid) continue;
-    // Removal keeps the order of the remaining particles, and solids are never removed.
-    if (p_.global_id[i] != saved_[k].id) throw std::logic_error("FsiInterface: the solid particles changed order");
-    p_.position[i] = saved_[k].x;
-    p_.velocity[i] = saved_[k].v;
-    ++k;
+    p_.position[i] = saved_x[i];
+    p_.velocity[i] = saved_v[i];
   }
-  saved_.clear();
+  predicted_ = false;
 }
 
 void FsiInterface::compute_load() {
   if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
+  // The ghosts as their owners hold them after the fluid step (positions, pressures, surface flags).
+  if (dist_ && dist_->n_ranks() > 1) dist_->exchange_ghosts(p_, {"position", opt_.pressure_field, opt_.flag_field});
   auto& load = p_.vector_field(opt_.load_field);
   const auto& flag = p_.scalar_field(opt_.flag_field);
   const auto& pressure = p_.scalar_field(opt_.pressure_field);
+  const auto& n0_solid = p_.scalar_field(field::n0_solid);
+  auto& prev_load = p_.vector_field(field::prev_load);
+  auto& had_load = p_.scalar_field(field::had_load);
   std::fill(load.begin(), load.end(), Vec::Zero());
-  loaded_.clear();
   for (auto& b : bodies_) {
     b.force.setZero();
     b.n_wetted = 0;
   }
-  // The loaded particles (solid surface, eq. 48) and their neighbours among all particles.
+  // The loaded particles (this rank's solid surface, eq. 48) and their neighbours among all particles.
   rows_.clear();
-  for (std::size_t i = 0; i < p_.size(); ++i)
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
     if (p_.kind[i] == ParticleKind::solid && flag[i] != 0 && !(opt_.exclude_clamped && p_.clamped[i]))
       rows_.push_back(static_cast<LocalIndex>(i));
   build_neighbour_list_of(p_.position, rows_, re_, rows_nl_, grid_);
   const Real volume = std::pow(dp_, dim);
   for (std::size_t q = 0; q < rows_.size(); ++q) {
     const auto i = static_cast<std::size_t>(rows_[q]);
-    const auto it = n0_solid_.find(p_.global_id[i]);
-    if (it == n0_solid_.end()) throw std::logic_error("FsiInterface: a solid particle appeared after initialize()");
     const Real pi = pressure[i];
     Real n_total = 0;
     Vec sum = Vec::Zero();
@@ -155,26 +214,27 @@ void FsiInterface::compute_load() {
                            wet = wet || fluid;
                            sum += (0.5 * (pi + pressure[j]) * w / r2) * rij;
                          });
-    const Real n_tilde = n_total - it->second;  // eq. 51
-    if (!wet || !(n_tilde > 0)) continue;
+    const Real n_tilde = n_total - n0_solid[i];  // eq. 51
+    if (!wet || !(n_tilde > 0)) {
+      had_load[i] = 0;  // a particle that falls dry starts afresh
+      continue;
+    }
     const Real n_norm = opt_.normalisation == FsiOptions::Normalisation::seed ? n_tilde : n0_;
     Vec f = -volume * (2.0 * dim / n_norm) * sum;  // eq. 50 times the particle volume, as -grad P
-    if (opt_.load_relaxation < 1) {
-      const auto prev = prev_load_.find(p_.global_id[i]);
-      if (prev != prev_load_.end()) f = opt_.load_relaxation * f + (1 - opt_.load_relaxation) * prev->second;
-    }
+    if (opt_.load_relaxation < 1 && had_load[i] != 0) f = opt_.load_relaxation * f + (1 - opt_.load_relaxation) * prev_load[i];
     load[i] = f;
-    loaded_.push_back(static_cast<LocalIndex>(i));
+    prev_load[i] = f;
+    had_load[i] = 1;
     const int slot = body_slot_[p_.body[i]];
     if (slot >= 0) {
       bodies_[static_cast<std::size_t>(slot)].force += f;
       ++bodies_[static_cast<std::size_t>(slot)].n_wetted;
     }
   }
-  if (opt_.load_relaxation < 1) {  // a particle that falls dry starts afresh
-    prev_load_.clear();
-    for (const LocalIndex li : loaded_) prev_load_[p_.global_id[static_cast<std::size_t>(li)]] = load[static_cast<std::size_t>(li)];
-  }
+  // Rows that are no surface rows any more (or clamped) carry no previous load either.
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid && load[i] == Vec::Zero()) had_load[i] = 0;
+  reduce_bodies(true);
 }
 
 void FsiInterface::advance_solid(SolidSolver& solid, const Real t, const Real dt, const int n_sub) {
@@ -182,22 +242,24 @@ void FsiInterface::advance_solid(SolidSolver& solid, const Real t, const Real dt
   const Real dts = dt / n_sub;
   for (auto& b : bodies_) b.work_step = 0;
   const auto& load = p_.vector_field(opt_.load_field);
-  solid_x_.clear();
-  for (std::size_t i = 0; i < p_.size(); ++i)
-    if (p_.kind[i] == ParticleKind::solid) solid_x_.push_back(p_.position[i]);
+  auto& start_x = p_.vector_field(field::start_x);
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) start_x[i] = p_.position[i];
   for (int k = 0; k < n_sub; ++k) {
-    solid.advance(t + k * dts, dts);
+    solid.advance(t + k * dts, dts);  // (may move particles between ranks: the fields go with them)
     // Symplectic Euler: the displacement of the sub-step is v_new dts, so F . v_new dts is the work.
-    for (const LocalIndex li : loaded_) {
-      const auto i = static_cast<std::size_t>(li);
+    for (std::size_t i = 0; i < p_.n_owned(); ++i) {
+      if (p_.kind[i] != ParticleKind::solid || load[i] == Vec::Zero()) continue;
       const int slot = body_slot_[p_.body[i]];
       if (slot >= 0) bodies_[static_cast<std::size_t>(slot)].work_step += dts * load[i].dot(p_.velocity[i]);
     }
   }
+  reduce_bodies(false);
   for (auto& b : bodies_) b.work_total += b.work_step;
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p_.size(); ++i)
-    if (p_.kind[i] == ParticleKind::solid) mean_v_[p_.global_id[i]] = (p_.position[i] - solid_x_[k++]) / dt;
+  auto& mean_v = p_.vector_field(field::mean_v);
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) mean_v[i] = (p_.position[i] - start_x[i]) / dt;
+  has_mean_v_ = true;
 }
 
 void FsiInterface::open_csv(const std::string& path, const bool append) {
@@ -206,31 +268,6 @@ void FsiInterface::open_csv(const std::string& path, const bool append) {
   check_written(csv_, csv_path_, "interface table");
   if (!append) csv_ << "time,body,fx,fy,work_step,work_total,wetted\n";
 }
-
-namespace {
-/// A GlobalId -> Vec map as two arrays sorted by id (the file does not depend on the hash order).
-void save_map(BinaryWriter& out, const std::unordered_map<GlobalId, Vec>& m) {
-  std::vector<std::pair<GlobalId, Vec>> items(m.begin(), m.end());
-  std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<GlobalId> ids;
-  std::vector<Vec> values;
-  for (const auto& [id, v] : items) {
-    ids.push_back(id);
-    values.push_back(v);
-  }
-  out.array(ids);
-  out.array(values);
-}
-
-std::unordered_map<GlobalId, Vec> load_map(BinaryReader& in, const char* what) {
-  const auto ids = in.array<GlobalId>(what);
-  const auto values = in.array<Vec>(what, ids.size());
-  std::unordered_map<GlobalId, Vec> m;
-  m.reserve(ids.size());
-  for (std::size_t k = 0; k < ids.size(); ++k) m.emplace(ids[k], values[k]);
-  return m;
-}
-}  // namespace
 
 void FsiInterface::save_state(BinaryWriter& out) const {
   out.section("coupling");
@@ -242,8 +279,7 @@ void FsiInterface::save_state(BinaryWriter& out) const {
     out.f64(b.work_total);
     out.u64(b.n_wetted);
   }
-  save_map(out, prev_load_);
-  save_map(out, mean_v_);
+  out.boolean(has_mean_v_);
 }
 
 void FsiInterface::load_state(BinaryReader& in) {
@@ -260,11 +296,8 @@ void FsiInterface::load_state(BinaryReader& in) {
     b.work_total = in.f64("an interface work");
     b.n_wetted = in.u64("a wetted count");
   }
-  auto prev = load_map(in, "the previous interface load");
-  auto mean_v = load_map(in, "the solid's mean velocity");
+  has_mean_v_ = in.boolean("the mean-velocity flag");
   bodies_.swap(bodies);
-  prev_load_.swap(prev);
-  mean_v_.swap(mean_v);
 }
 
 void FsiInterface::write_csv(const Real t) {

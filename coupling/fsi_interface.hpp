@@ -39,12 +39,12 @@
 
 #include <fstream>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace mpsfsi {
 
 class SolidSolver;
+class Distribution;
 class BinaryWriter;
 class BinaryReader;
 
@@ -92,8 +92,11 @@ SubcycleChoice choose_subcycles(int requested, Real dt_fluid, Real dt_solid);
 
 class FsiInterface {
  public:
-  /// The interface of `particles` (fluid and solid particles, plus walls) for the case `spec`.
-  FsiInterface(const CaseSpec& spec, ParticleSet& particles, const FsiOptions& options = {});
+  /// The interface of `particles` (fluid and solid particles, plus walls) for the case `spec`. With a
+  /// distribution, `particles` holds this rank's owned particles and ghosts, every call below is a collective
+  /// over its ranks, and bodies() holds the totals over all ranks.
+  FsiInterface(const CaseSpec& spec, ParticleSet& particles, const FsiOptions& options = {},
+               Distribution* distribution = nullptr);
 
   /// The fluid's options for a coupled run: solid surface particles are boundary, the rest dummies.
   static FluidOptions fluid_options(const FsiOptions& options = {}, FluidOptions base = {});
@@ -121,28 +124,27 @@ class FsiInterface {
   void open_csv(const std::string& path, bool append = false);
   void write_csv(Real t);
 
-  /// Checkpoints: what the interface carries from step to step (the per-body totals, the previous
-  /// step's load for load_relaxation, the solid's mean velocity for the mid-step predictor). The initial
-  /// solid number densities are rebuilt by initialize() from the initial scene.
+  /// Checkpoints: the per-body totals. What the interface knows of a particle is in particle fields that
+  /// travel with it and that the checkpoint holds (internal, "_fsi_*": the initial solid number density, the
+  /// previous step's load for load_relaxation, the solid's mean velocity for the mid-step predictor).
   void save_state(BinaryWriter& out) const;
   void load_state(BinaryReader& in);
 
  private:
+  /// Owners and ghosts current (migration when due, else the ghosts' positions and velocities refreshed).
+  void sync();
+  /// Sums the per-body force and wetted count (after compute_load) or work (after advance_solid) over the ranks.
+  void reduce_bodies(bool force);
+
   ParticleSet& p_;
   FsiOptions opt_;
+  Distribution* dist_ = nullptr;
   Real dp_ = 0, re_ = 0, n0_ = 0;
   bool initialized_ = false;
-  std::unordered_map<GlobalId, Real> n0_solid_;
+  bool has_mean_v_ = false;              ///< the solid's mean velocity (field) is set: the predictor applies
   std::vector<InterfaceBody> bodies_;
   std::vector<int> body_slot_;           ///< ParticleSet body -> index into bodies_, or -1
-  std::vector<LocalIndex> loaded_;       ///< particles with a load at the last compute_load
-  std::unordered_map<GlobalId, Vec> prev_load_;  ///< applied load of the previous step (load_relaxation)
-  struct Saved {
-    GlobalId id;
-    Vec x, v;
-  };
-  std::vector<Saved> saved_;             ///< solid state during the fluid step (midstep_predictor)
-  std::unordered_map<GlobalId, Vec> mean_v_;  ///< solid mean velocity over the last step
+  bool predicted_ = false;               ///< the solid is at its predicted state (restore_solid puts it back)
   std::vector<Vec> solid_x_;             ///< scratch: solid positions (offset field)
   std::vector<LocalIndex> solid_i_;
   NeighbourList solid_nl_;

@@ -4,8 +4,8 @@
 // fluid and solid the steps go through the FsiInterface participant loop (coupling/fsi_interface.hpp), with
 // the solid's bond damping and the load relaxation of the case's coupling map. On several ranks the
 // particles are distributed (core/distribution.hpp): each rank steps, checks and writes (one piece per
-// frame) its owned particles, and checkpoints gather the state by global id on rank 0. The solid and the
-// coupling are not distributed yet: a case with a solid keeps every particle on rank 0.
+// frame) its owned particles, and checkpoints gather the state by global id on rank 0; fluid, solid and
+// coupling each renew owners and ghosts when they need them.
 #include "coupling/simulation.hpp"
 
 #include "core/distribution.hpp"
@@ -53,29 +53,6 @@ int size_of(MPI_Comm comm) {
   int size = 1;
   MPI_Comm_size(comm, &size);
   return size;
-}
-
-/// Every rank registers the extra fields of rank 0 (the solid's, registered on rank 0 alone), so that all
-/// ranks' particles carry the same arrays.
-void share_fields(ParticleSet& p, MPI_Comm comm) {
-  std::string names;  // "s:name\n" or "v:name\n"
-  if (rank_of(comm) == 0) {
-    for (const auto& kv : p.scalar_fields()) names += "s:" + kv.first + "\n";
-    for (const auto& kv : p.vector_fields()) names += "v:" + kv.first + "\n";
-  }
-  std::uint64_t n = names.size();
-  MPI_Bcast(&n, 1, MPI_UINT64_T, 0, comm);
-  names.resize(n);
-  if (n > 0) MPI_Bcast(names.data(), static_cast<int>(n), MPI_CHAR, 0, comm);
-  for (std::size_t a = 0; a < names.size();) {
-    const std::size_t e = names.find('\n', a);
-    const std::string name = names.substr(a + 2, e - a - 2);
-    if (names[a] == 's')
-      p.add_scalar_field(name);
-    else
-      p.add_vector_field(name);
-    a = e + 1;
-  }
 }
 
 long peak_memory_kib() {
@@ -132,31 +109,30 @@ class RunLoop {
     ds.method = spec.parallel.partition;
     ds.imbalance_threshold = spec.parallel.imbalance;
     ds.skin = spec.parallel.skin * spec.dp;
-    ds.halo_width = (has_fluid ? fluid_interaction_radius(fluid_setup(spec)) : 0) + ds.skin;
-    ds.all_on_rank0 = has_solid;
+    ds.halo_width = std::max(has_fluid ? fluid_interaction_radius(fluid_setup(spec)) : 0.0,
+                             has_solid ? solid_interaction_radius(solid_setup(spec)) : 0.0) + ds.skin;
     dist_ = std::make_unique<Distribution>(comm, ds);
     dist_->distribute_replicated(p_);
     if (has_fluid)
       fluid_ = std::make_unique<FluidSolver>(fluid_setup(spec), p_, *dist_, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
-    // The solid and the coupling live on rank 0, which holds every particle of a case with a solid.
-    on_rank0(comm, [&] {
-      if (!has_solid) return;
+    // The solid and the coupling, distributed like the fluid (their constructors are collectives that throw on
+    // every rank alike).
+    if (has_solid) {
       try {
-        solid_ = std::make_unique<SolidSolver>(solid_setup(spec), p_);
-      } catch (const SetupError& e) {  // the case does not fit the scene: bad input (exit 2), as before the solver
+        solid_ = std::make_unique<SolidSolver>(solid_setup(spec), p_, *dist_);
+      } catch (const SetupError& e) {  // the case does not fit the scene: bad input (exit 2)
         throw CaseError(e.what());
       }
       solid_->set_output_directory(settings.output_dir, appends("fragments.csv"));
-      if (fluid_) {
-        FsiOptions fo;
-        fo.load_relaxation = spec.coupling.load_relaxation;
-        solid_->set_damping(spec.coupling.solid_damping);
-        coupling_ = std::make_unique<FsiInterface>(spec, p_, fo);
-        coupling_->initialize();
-        coupling_->open_csv(settings.output_dir + "/interface.csv", appends("interface.csv"));
-      }
-    });
-    if (n_ranks_ > 1) share_fields(p_, comm);
+    }
+    if (fluid_ && solid_) {
+      FsiOptions fo;
+      fo.load_relaxation = spec.coupling.load_relaxation;
+      solid_->set_damping(spec.coupling.solid_damping);
+      coupling_ = std::make_unique<FsiInterface>(spec, p_, fo, dist_.get());
+      coupling_->initialize();
+      on_rank0(comm, [&] { coupling_->open_csv(settings.output_dir + "/interface.csv", appends("interface.csv")); });
+    }
     check_output_fields();
     writer_.set_fields(spec.output.fields);
     summary_.pvd_path = writer_.pvd_path();
@@ -174,7 +150,7 @@ class RunLoop {
     step_begin_ = step_;
     if (!settings_.restart) {
       write_output();
-      receivers_.record_if_due(t_, p_);
+      receivers_.record_if_due(t_, p_, comm_);
     }
     report_projection();
     const Real eps = 1e-12 * std::max<Real>(1, spec_.time.end);
@@ -185,7 +161,7 @@ class RunLoop {
     while (t_ < spec_.time.end - eps) {
       keep_last_good();
       step();
-      receivers_.record_if_due(t_, p_);
+      receivers_.record_if_due(t_, p_, comm_);
       report_progress(t_start, false);
       if (step_ - step_begin_ == 20) report_measured_projection(t_start);
       if (t_ >= next_output_ - eps) {
@@ -265,13 +241,13 @@ class RunLoop {
         raised_said_ = true;
       }
     }
-    if (n_ranks_ > 1) {  // rank 0, which holds any solid, decides the step for all (and alone logs its limit)
+    if (n_ranks_ > 1) {  // rank 0 decides the step for all (and alone logs its limit)
       Real step[2] = {dt, static_cast<Real>(n_sub)};
       MPI_Bcast(step, 2, MPI_DOUBLE, 0, comm_);
       dt = step[0];
       n_sub = static_cast<int>(step[1]);
     }
-    if (n_ranks_ > 1 && !has_solid_ && step_ % repartition_every == 0) {
+    if (n_ranks_ > 1 && step_ % repartition_every == 0) {
       const auto t0 = Clock::now();
       if (dist_->imbalance(p_) > dist_->settings().imbalance_threshold) dist_->partition(p_);
       summary_.t_fluid += seconds_since(t0);
@@ -490,7 +466,8 @@ class RunLoop {
   /// run on every rank with OutputError; the series lists only the complete frames written before.
   void write_output() {
     const auto t0 = Clock::now();
-    if (solid_) solid_->prepare_output(t_);
+    // The solid's derived fields and fragments.csv (written by rank 0 once every rank is past the collectives).
+    if (solid_) on_every_rank(comm_, [&] { solid_->prepare_output(t_); });
     const std::vector<Real> probe_values = probes_.evaluate(p_, t_, comm_);
     try {
       // Every rank writes its piece; once all are complete, rank 0 adds the frame to the series.
@@ -704,10 +681,8 @@ class RunLoop {
       if (fluid_) exact_ = fluid_->load_state(in);
       if (solid_) solid_->load_state(in);
       if (coupling_) coupling_->load_state(in);
-      if (rank_ == 0 || !has_solid_) {  // the solid's sections are rank 0's
-        in.expect_section("end");
-        if (!in.at_end()) in.fail("unexpected data after the state");
-      }
+      in.expect_section("end");
+      if (!in.at_end()) in.fail("unexpected data after the state");
     } catch (const StateFormatError& e) {
       throw CaseError(std::string("checkpoint ") + e.what());
     }
@@ -762,7 +737,7 @@ class RunLoop {
   ProbeWriter probes_;
   ReceiverWriter receivers_;  ///< receivers.csv (rank 0), rows every step or every receivers.interval
   std::unique_ptr<Distribution> dist_;
-  bool has_solid_ = false;  ///< the case has a solid (on rank 0: solid_)
+  bool has_solid_ = false;  ///< the case has a solid
   /// Steps between checks of the owned work's balance (re-partition above the threshold).
   static constexpr std::size_t repartition_every = 20;
   std::unique_ptr<FluidSolver> fluid_;

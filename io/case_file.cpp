@@ -25,6 +25,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <utility>
 
@@ -1197,9 +1198,10 @@ void read_receivers(MapReader r, CaseSpec& spec) {
 void read_output(MapReader r, const Real end, OutputSpec& out) {
   out.interval = r.number("interval", out.interval, positive, "a positive number (simulated time between frames) [s]");
   check_interval(r, "interval", out.interval, r.has("interval"), end, "frames");
+  std::set<std::string> seen;
   for (const Field& f : r.list("fields", "a list of field names, e.g. [pressure, velocity]", false)) {
     const std::string name = to_name(r.source(), f, "a field name (" + name_form + ")");
-    if (std::find(out.fields.begin(), out.fields.end(), name) != out.fields.end())
+    if (!seen.insert(name).second)
       r.source().fail(f, fmt::format("{} = {}: duplicate field; expected each field once", f.path, name));
     out.fields.push_back(name);
   }

@@ -69,39 +69,59 @@ void ReceiverWriter::resolve(const ParticleSet& p) const {
   bool moved = false;
   for (const auto& r : receivers_)
     for (std::size_t q = 0; q < r.id.size() && !moved; ++q) {
-      const auto i = static_cast<std::size_t>(r.at[q]);
-      moved = i >= p.size() || p.global_id[i] != r.id[q];
+      const LocalIndex i = r.at[q];
+      moved = i >= 0 && (static_cast<std::size_t>(i) >= p.n_owned() || p.global_id[static_cast<std::size_t>(i)] != r.id[q]);
+      moved = moved || (i < 0 && p.local_index(r.id[q]) >= 0);
     }
   if (!moved) return;
   for (const auto& r : receivers_)
     for (std::size_t q = 0; q < r.id.size(); ++q) {
-      r.at[q] = p.local_index(r.id[q]);
-      if (r.at[q] < 0) throw std::logic_error("ReceiverWriter: a receiver particle disappeared");
+      const LocalIndex i = p.local_index(r.id[q]);
+      r.at[q] = i >= 0 && static_cast<std::size_t>(i) < p.n_owned() ? i : -1;  // owned here, or another rank's
     }
 }
 
-std::vector<Vec> ReceiverWriter::evaluate(const ParticleSet& p) const {
+std::vector<Vec> ReceiverWriter::evaluate(const ParticleSet& p, MPI_Comm comm) const {
   resolve(p);
-  std::vector<Vec> u;
-  u.reserve(receivers_.size());
+  // Per receiver: the sum over this rank's owned stencil particles and their count, then summed over the ranks.
+  std::vector<Real> sums;
   for (const auto& r : receivers_) {
     Vec s = Vec::Zero();
-    for (std::size_t q = 0; q < r.id.size(); ++q) s += r.phi[q] * (p.position[static_cast<std::size_t>(r.at[q])] - r.x0[q]);
-    u.push_back(s);
+    Real found = 0;
+    for (std::size_t q = 0; q < r.id.size(); ++q) {
+      if (r.at[q] < 0) continue;
+      s += r.phi[q] * (p.position[static_cast<std::size_t>(r.at[q])] - r.x0[q]);
+      found += 1;
+    }
+    for (int a = 0; a < dim; ++a) sums.push_back(s[a]);
+    sums.push_back(found);
+  }
+  int size = 1;
+  if (comm != MPI_COMM_NULL) MPI_Comm_size(comm, &size);
+  if (size > 1 && !sums.empty()) MPI_Allreduce(MPI_IN_PLACE, sums.data(), static_cast<int>(sums.size()), MPI_DOUBLE, MPI_SUM, comm);
+  std::vector<Vec> u;
+  u.reserve(receivers_.size());
+  for (std::size_t k = 0; k < receivers_.size(); ++k) {
+    const Real* v = &sums[k * (dim + 1)];
+    if (static_cast<std::size_t>(v[dim]) != receivers_[k].id.size())
+      throw std::logic_error("ReceiverWriter: a receiver particle disappeared");
+    u.push_back(Eigen::Map<const Vec>(v));
   }
   return u;
 }
 
-void ReceiverWriter::record_if_due(const Real t, const ParticleSet& particles) {
-  if (receivers_.empty() || !out_.is_open()) return;
+void ReceiverWriter::record_if_due(const Real t, const ParticleSet& particles, MPI_Comm comm) {
+  if (receivers_.empty()) return;
   if (started_ && interval_ && t < next_ - 1e-9 * *interval_) return;
   if (interval_) {
     next_ = started_ ? next_ + *interval_ : t + *interval_;
     while (next_ <= t + 1e-9 * *interval_) next_ += *interval_;
   }
   started_ = true;
+  const std::vector<Vec> values = evaluate(particles, comm);  // on every rank: a collective
+  if (!out_.is_open()) return;
   out_ << fmt::format("{:.9g}", t);
-  for (const Vec& u : evaluate(particles)) out_ << fmt::format(",{:.9g},{:.9g}", u[0], u[1]);
+  for (const Vec& u : values) out_ << fmt::format(",{:.9g},{:.9g}", u[0], u[1]);
   out_ << "\n";
   if (++rows_ % 256 == 0) flush();
 }

@@ -13,6 +13,8 @@
 #include "core/particles.hpp"
 #include "io/case.hpp"
 
+#include <mpi.h>
+
 #include <fstream>
 #include <string>
 #include <vector>
@@ -27,10 +29,12 @@ class ReceiverWriter {
   ReceiverWriter(const CaseSpec& spec, const ParticleSet& particles, const std::string& path, bool append = false);
   bool empty() const { return receivers_.empty(); }
   /// Append a row at time t if one is due: at the first call, then once the interval has passed since
-  /// the last row (every call when the case gives no interval).
-  void record_if_due(Real t, const ParticleSet& particles);
-  /// Displacement of every receiver now, in the order of the case file.
-  std::vector<Vec> evaluate(const ParticleSet& particles) const;
+  /// the last row (every call when the case gives no interval). Every rank of `comm` calls it (the schedule
+  /// is the same on all); the rank with the file writes the row.
+  void record_if_due(Real t, const ParticleSet& particles, MPI_Comm comm = MPI_COMM_NULL);
+  /// Displacement of every receiver now, in the order of the case file: the sums over each rank's owned
+  /// particles, added over the ranks of `comm` (MPI_COMM_NULL: this process holds every particle). Collective.
+  std::vector<Vec> evaluate(const ParticleSet& particles, MPI_Comm comm = MPI_COMM_NULL) const;
   /// Column names after "time".
   const std::vector<std::string>& columns() const { return columns_; }
   /// Push the rows written so far to the file (before a checkpoint marks the file's size).
@@ -46,7 +50,7 @@ class ReceiverWriter {
  private:
   struct Receiver {
     std::vector<GlobalId> id;            ///< particles of the stencil
-    mutable std::vector<LocalIndex> at;  ///< their current local indices (re-resolved after a reorder)
+    mutable std::vector<LocalIndex> at;  ///< their current local indices if owned here, else -1 (re-resolved)
     std::vector<Vec> x0;                 ///< their initial positions
     std::vector<Real> phi;               ///< interpolation weights
   };

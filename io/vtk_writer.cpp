@@ -234,8 +234,11 @@ std::string VtkSeriesWriter::write_piece(const ParticleSet& particles, const dou
   std::vector<std::pair<std::string, const std::vector<Real>*>> scalars;
   std::vector<std::pair<std::string, const std::vector<Vec>*>> vectors;
   if (fields_.empty()) {
-    for (const auto& [name, values] : particles.scalar_fields()) scalars.emplace_back(name, &values);
-    for (const auto& [name, values] : particles.vector_fields()) vectors.emplace_back(name, &values);
+    // Internal fields (names starting with '_') only when asked for by name.
+    for (const auto& [name, values] : particles.scalar_fields())
+      if (name[0] != '_') scalars.emplace_back(name, &values);
+    for (const auto& [name, values] : particles.vector_fields())
+      if (name[0] != '_') vectors.emplace_back(name, &values);
   } else {
     for (const auto& name : fields_) {
       const bool is_scalar = particles.has_scalar_field(name);

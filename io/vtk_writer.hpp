@@ -25,7 +25,7 @@ class VtkSeriesWriter {
   /// <basename>_<frame>.pvtu and the .pvd.
   explicit VtkSeriesWriter(std::string directory, std::string basename = "particles", int piece = 0, int n_pieces = 1);
 
-  /// Only these extra fields are written (empty: all). The core arrays (velocity, kind, body,
+  /// Only these extra fields are written (empty: all but the internal ones, named "_..."). The core arrays (velocity, kind, body,
   /// material, clamped, global_id) are always written. A listed name that is neither a scalar nor a
   /// vector field of the particles makes write() throw std::invalid_argument.
   void set_fields(std::vector<std::string> fields);

@@ -25,10 +25,17 @@
 //   per-bond weights that make it exact for linear fields and keeps the pair form of the pressure force.
 // * cos and sin of the mean angle come from per-particle half-angle cos/sin by the addition theorem:
 //   two trig calls per particle per step instead of two per bond.
-// * Bonds are stored once per pair (j > i) in CSR with r0, 1/|r0|, w0/|r0| and the pair stiffness.
+// * Distributed over ranks (core/distribution.hpp): each rank advances its owned particles; a particle's bonds
+//   are stored with it (CSR, both directions) and computed at both ends with operations that are symmetric or
+//   odd in the exchange of the pair, so both ends, on one rank or two, compute the same numbers and a bond breaks
+//   on both sides in the same step. What the solid knows of a particle travels with it in particle fields: its reference
+//   position, 1/n0, the reference bond count and the broken bonds (one bit per lattice offset within re).
+// * The sums over a particle's bonds and contacts run in order of the partner's global id, so a step gives
+//   the same particle state on any rank count.
 #include "solid/solid_solver.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/distribution.hpp"
 #include "core/files.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
@@ -44,6 +51,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <stdexcept>
 
@@ -52,6 +60,34 @@ namespace mpsfsi {
 namespace {
 
 constexpr Real n_c = 0.5;  ///< surface threshold of eq. 48
+
+/// The solid's internal per-particle fields (names starting with '_' are not written unless asked for). They
+/// travel with a particle between ranks and into checkpoints: everything the solid knows of a particle.
+namespace internal {
+constexpr const char* x0 = "_solid_x0";            ///< reference position (the bonds' r0, eq. 25)
+constexpr const char* inv_n0 = "_solid_inv_n0";    ///< 1 / n0_i of solid.normalisation
+constexpr const char* n_bonds0 = "_solid_bonds0";  ///< bonds in the reference configuration
+constexpr const char* broken = "_solid_broken";    ///< broken bonds: bit k for the lattice offset k (offset_slot)
+constexpr const char* pn = "_solid_pn";            ///< p_i / n0_i of this step (eq. 33, 38)
+constexpr const char* label = "_solid_label";      ///< fragment label (smallest global id of the fragment)
+constexpr const char* coef[3] = {"_solid_bxx", "_solid_byy", "_solid_bxy"};  ///< corrected strain weights (B_i)
+}  // namespace internal
+
+/// The lowest rank's non-empty message on every rank (empty if none); `comm` may be MPI_COMM_NULL (one process).
+std::string agreed(MPI_Comm comm, std::string local) {
+  if (comm == MPI_COMM_NULL) return local;
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  int first = local.empty() ? size : rank;
+  MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) return {};
+  std::uint64_t n = local.size();
+  MPI_Bcast(&n, 1, MPI_UINT64_T, first, comm);
+  local.resize(n);
+  MPI_Bcast(local.data(), static_cast<int>(n), MPI_CHAR, first, comm);
+  return local;
+}
 
 }  // namespace
 
@@ -74,64 +110,52 @@ Real p_wave_speed(const SolidMaterial& m, const SolidParameters& numerics) {
   return std::sqrt((l.lambda + 2 * l.mu) / m.rho);
 }
 
+Real solid_interaction_radius(const SolidSetup& setup) { return 1.25 * setup.parameters.re * setup.dp; }
+
 struct SolidSolver::Impl {
+  struct MaterialConstants {
+    Real lambda = 0, mu = 0, mass = 0, inertia = 0, eps_max = 0;
+  };
   struct Load {
     SolidLoadSpec spec;
-    std::vector<LocalIndex> members;  ///< solid indices
+    std::vector<std::size_t> members;  ///< owned solid indices k, renewed with the bonds
+  };
+  struct Source {
+    SourceSpec spec;
+    std::vector<GlobalId> id;  ///< the stencil's particles (on every rank: a few dozen)
+    std::vector<Vec> g;        ///< force per unit amplitude s(t) (solid/sources.hpp)
+    std::vector<std::pair<std::size_t, std::size_t>> members;  ///< (owned k, stencil entry), renewed with the bonds
   };
 
   ParticleSet& p;
-  Real dp = 0;
+  Distribution* dist = nullptr;  ///< null: this process holds the whole solid
+  MPI_Comm comm = MPI_COMM_NULL;
+  Real dp = 0, re = 0;
   Real volume = 0;        ///< l0^d: particle volume per unit thickness
   Real n0_lattice = 0;
-  Real n_max = 0;         ///< n_i^max of eq. 48
+  Real n_max = 0;         ///< n_i^max of eq. 48 (over all ranks)
   Real k_contact = 0;     ///< contact spring [N/m per unit thickness]
   Real dt_factor = 0.2;
   Real c_p_max = 0;
-  Real damping_time = 0;    ///< Kelvin-Voigt retardation time eta of the bonds [s] (0: none)
-  bool plane_stress = false;
+  Real damping_time = 0;  ///< Kelvin-Voigt retardation time eta of the bonds [s] (0: none)
+  bool plane_stress = false, corrected = false, breakable = false;
   Vec gravity = Vec::Zero();
-  TankMotion tank;          ///< prescribed tank roll; clamped particles follow it
-  std::size_t n_total = 0;  ///< particle count at the last gather (a change means pid must be re-resolved)
+  TankMotion tank;
+  std::vector<MaterialConstants> mat;
+  std::size_t n_broken = 0;  ///< bonds broken so far (all ranks)
 
-  // Per solid particle k (particle index pid[k]).
-  std::vector<LocalIndex> pid;
-  std::vector<GlobalId> gid;  ///< global id of solid k (to follow a reordering of the particle set)
-  std::vector<Vec> x, v, x0, force;
-  std::vector<Rotation> rotation;     ///< each particle's rotation (eq. 45-46; a scalar angle in 2D)
-  std::vector<Angular> omega, torque;  ///< angular velocity and torque (the z component in 2D)
-  std::vector<Real> tr, pn, ch, sh;
-  std::vector<Real> mass, inertia, lambda, mu, inv_n0, n_now, eps_max;
-  std::vector<std::uint8_t> clamped, surface;
+  // Lattice offsets within re: bit slot of the bond to the particle at x0_i + dp * offset.
+  int o_range = 0;
+  std::vector<int> o_slot;  ///< dense over [-o_range, o_range]^d; -1: not a bond direction
 
-  // Bonds, once per pair (i < j), CSR over i.
-  std::vector<std::size_t> b_off;
-  std::vector<LocalIndex> b_j;
-  std::vector<Vec> b_r0;
-  std::vector<Real> b_inv_r0, b_wr, b_k, b_w0;
-  /// Volumetric strain weights of the bond on each side: tr(eps)_i = sum_j b_vi un_ij (eq. 30): d/n0_i w0/|r0|,
-  /// or with solid.volumetric_strain = corrected w0/|r0| e0^T B_i e0 (exact trace of a linear field).
-  std::vector<Real> b_vi, b_vj;
-  std::vector<std::uint8_t> b_intact;
-  std::vector<Vec> b_ce;  ///< scratch: V d w0/|r0| e_ij of this step
-  std::size_t n_broken = 0;
-
-  std::vector<Load> loads;
-
-  struct Source {
-    SourceSpec spec;
-    std::vector<LocalIndex> members;  ///< solid indices
-    std::vector<Vec> g;               ///< force per unit amplitude s(t) (solid/sources.hpp)
-  };
-  std::vector<Source> sources;
-
-  // Contact scratch.
-  std::vector<Vec> s_x;
-  std::vector<LocalIndex> s_k;
-  NeighbourList s_nl;
-  CellGrid s_grid;
-
-  // Output.
+  // Fields.
+  std::vector<Vec>* f_x0 = nullptr;
+  std::vector<Real>* f_inv_n0 = nullptr;
+  std::vector<Real>* f_bonds0 = nullptr;
+  std::vector<Real>* f_broken = nullptr;
+  std::vector<Real>* f_pn = nullptr;
+  std::vector<Real>* f_label = nullptr;
+  std::vector<Real>* f_coef[3] = {nullptr, nullptr, nullptr};
   std::vector<Real>* f_theta = nullptr;
   std::vector<Real>* f_omega = nullptr;
   std::vector<Real>* f_von_mises = nullptr;
@@ -140,70 +164,153 @@ struct SolidSolver::Impl {
   std::vector<Real>* f_surface = nullptr;
   std::vector<Vec>* f_displacement = nullptr;
   std::vector<Vec>* f_load = nullptr;
-  std::vector<int> fragment;  ///< per solid particle, at the last prepare_output
+
+  // Local structure, renewed when the particle set changed (migration, ghosts, reorder, restart).
+  std::vector<GlobalId> seen_gid;  ///< global ids of the set at the last renewal (owned, then ghosts)
+  std::size_t seen_owned = 0;
+  std::vector<LocalIndex> own;     ///< owned solid particles k -> local index
+  std::vector<LocalIndex> local;   ///< owned and ghost solid particles (contact candidates, half angles)
+  // Bonds of each owned solid particle k (both directions: every rank computes its own particles' forces),
+  // CSR over k, sorted by the partner's global id.
+  std::vector<std::size_t> b_off;
+  std::vector<LocalIndex> b_j;
+  std::vector<Vec> b_r0;            ///< x0_j - x0_i
+  std::vector<Real> b_inv_r0, b_wr, b_k, b_w0, b_vi;
+  std::vector<std::uint8_t> b_slot_i, b_slot_j;  ///< bit slots of the offsets i -> j and j -> i
+  std::vector<std::uint8_t> b_intact;
+  std::vector<Vec> b_ce;            ///< scratch: V d w0/|r0| e_ij of this step
+  // Per owned k.
+  std::vector<Vec> force;
+  std::vector<Angular> torque;
+  std::vector<Real> tr;
+  std::vector<std::uint8_t> new_surface;
+  // Per local particle (size of the set).
+  std::vector<Real> ch, sh;
+  std::vector<Load> loads;
+  std::vector<Source> sources;
+  // Contact scratch.
+  std::vector<Vec> s_x;
+  std::vector<LocalIndex> s_i;
+  std::vector<std::pair<GlobalId, LocalIndex>> s_pairs;
+  NeighbourList s_nl;
+  CellGrid s_grid;
+
+  // Fragments (at the last prepare_output).
   std::size_t n_frag = 0;
-  std::vector<int> uf_parent;
   std::string out_dir;
   bool csv_started = false;
-  bool breakable = false;  ///< some material has a fracture strain: fragments.csv is written
 
-  Impl(const SolidSetup& setup, ParticleSet& particles);
-  std::size_t n() const { return pid.size(); }
-  void gather();
-  void scatter();
-  void compute_half_angles();
-  /// Relative displacement of bond b = (i, j) with the pair's mean rotation removed,
-  /// u_ij = r_ij - R((theta_i + theta_j)/2) r0_ij (eq. 25), from the half-angle cosines and sines.
-  Vec bond_displacement(const std::size_t i, const std::size_t j, const std::size_t b) const {
-    const Real c = ch[i] * ch[j] - sh[i] * sh[j];  // cos((theta_i + theta_j)/2)
-    const Real s = sh[i] * ch[j] + ch[i] * sh[j];  // sin((theta_i + theta_j)/2)
-    const Vec r0 = b_r0[b];
-    const Vec r = x[j] - x[i];
-    return Vec(r[0] - (c * r0[0] - s * r0[1]), r[1] - (s * r0[0] + c * r0[1]));
+  Impl(const SolidSetup& setup, ParticleSet& particles, Distribution* distribution);
+  std::size_t n() const { return own.size(); }
+  int n_ranks() const { return dist ? dist->n_ranks() : 1; }
+  bool is_solid(const std::size_t i) const { return p.kind[i] == ParticleKind::solid; }
+  std::uint64_t broken_bits(const std::size_t i) const { return static_cast<std::uint64_t>((*f_broken)[i]); }
+  void set_broken_bit(const std::size_t i, const int slot) {
+    (*f_broken)[i] = static_cast<Real>(broken_bits(i) | (std::uint64_t{1} << slot));
   }
-  /// Call f(i, j, b, r_ij, u_ij) for every intact bond b = (i, j), each pair once (not the hot step loop,
-  /// which also breaks bonds).
+  /// Bit slot of the reference offset r0 (x0_j - x0_i), or -1 when r0 is not dp times a lattice offset in range.
+  int slot_of(const Vec& r0) const {
+    std::size_t k = 0, stride = 1;
+    for (int a = 0; a < dim; ++a) {
+      const Real q = r0[a] / dp;
+      const long o = std::lround(q);
+      if (std::abs(q - static_cast<Real>(o)) > 1e-6 || std::abs(o) > o_range) return -1;
+      k += static_cast<std::size_t>(o + o_range) * stride;
+      stride *= static_cast<std::size_t>(2 * o_range + 1);
+    }
+    return o_slot[k];
+  }
+  template <class T>
+  void allreduce(T* values, int n, MPI_Datatype type, MPI_Op op) const {
+    if (comm != MPI_COMM_NULL) MPI_Allreduce(MPI_IN_PLACE, values, n, type, op, comm);
+  }
+  void exchange(const std::vector<std::string>& fields) {
+    if (dist && dist->n_ranks() > 1) dist->exchange_ghosts(p, fields);
+  }
+  /// Owners and ghosts current for a solid step (migration and new ghosts when due, else the ghosts' state
+  /// refreshed), then the local structure renewed if the set changed.
+  void sync();
+  bool set_changed() const;
+  /// Owned and local solid lists, bonds, load and source members from the particle set.
+  void renew_structure();
+  void compute_half_angles();
+  /// Relative displacement u_ij = r_ij - R((theta_i + theta_j)/2) r0_ij (eq. 25) and r_ij of bond b of owned
+  /// particle i. Every operation is symmetric (cos, sin of the mean angle) or odd (r, r0) in the exchange of i
+  /// and j, so the other end computes exactly -u_ij and -r_ij, bit for bit.
+  void bond_state(const std::size_t i, const std::size_t b, Vec& r, Vec& u) const {
+    const auto j = static_cast<std::size_t>(b_j[b]);
+    const Real cs = ch[i] * ch[j] - sh[i] * sh[j];  // cos((theta_i + theta_j)/2)
+    const Real sn = sh[i] * ch[j] + ch[i] * sh[j];  // sin((theta_i + theta_j)/2)
+    const Vec r0 = b_r0[b];
+    r = p.position[j] - p.position[i];
+    u = Vec(r[0] - (cs * r0[0] - sn * r0[1]), r[1] - (sn * r0[0] + cs * r0[1]));
+  }
+  /// Call f(k, i, j, b, r_ij, u_ij) for every intact bond of every owned solid particle.
   template <class F>
   void for_each_intact_bond(F&& f) const {
-    for (std::size_t i = 0; i < n(); ++i)
-      for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+    for (std::size_t k = 0; k < n(); ++k) {
+      const auto i = static_cast<std::size_t>(own[k]);
+      for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
         if (!b_intact[b]) continue;
-        const auto j = static_cast<std::size_t>(b_j[b]);
-        f(i, j, b, Vec(x[j] - x[i]), bond_displacement(i, j, b));
+        Vec r, u;
+        bond_state(i, b, r, u);
+        f(k, i, static_cast<std::size_t>(b_j[b]), b, r, u);
       }
+    }
   }
-  /// b_vi, b_vj: d/n0_i w0/|r0| (eq. 30 with the n0 of solid.normalisation) or, `corrected`, the weights
-  /// w0/|r0| e0^T B_i e0 with B_i such that sum_j w0 (e0^T B_i e0) e0 e0^T = I: then sum_j b_vi un_ij is the
-  /// trace of any linear displacement field also where the neighbourhood is truncated (a free surface);
-  /// in the interior of the lattice B_i = d/n0 I, the same as eq. 30.
-  void set_volumetric_weights(bool corrected);
-  /// Index of the bond (i, j) in the CSR, or npos.
-  std::size_t find_bond(LocalIndex i, LocalIndex j) const;
+  bool bonded(const std::size_t k, const LocalIndex j) const {
+    for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b)
+      if (b_j[b] == j) return b_intact[b] != 0;
+    return false;
+  }
   void contact_forces(std::size_t& n_contacts);
+  /// Fragment labels (field _solid_label) and their count n_frag. Collective.
   void compute_fragments();
   SolidStepReport advance(Real t, Real dt);
+  const MaterialConstants& material_of(const std::size_t i) const { return mat[static_cast<std::size_t>(p.material[i])]; }
 };
 
-SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles) : p(particles) {
+SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distribution* distribution)
+    : p(particles), dist(distribution) {
+  if (dist) comm = dist->comm();
   const SolidParameters& solid = setup.parameters;
   dp = setup.dp;
   volume = std::pow(dp, dim);
-  const Real re = solid.re * dp;
+  re = solid.re * dp;
   n0_lattice = lattice_constants(dp, re).n0;
   dt_factor = solid.dt_factor;
   plane_stress = solid.plane_stress;
+  corrected = solid.volumetric_strain == VolumetricStrain::corrected;
   gravity = setup.gravity;
   tank = make_tank_motion(setup.tank_motion);
-  n_total = p.size();
-  const SolidNormalisation norm = solid.normalisation;
 
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (p.kind[i] == ParticleKind::solid) {
-      pid.push_back(static_cast<LocalIndex>(i));
-      gid.push_back(p.global_id[i]);
+  // Lattice offsets within re, in lexicographic order: the bit slots of the broken-bond flags.
+  o_range = static_cast<int>(std::ceil(solid.re));
+  const int width = 2 * o_range + 1;
+  o_slot.assign(static_cast<std::size_t>(std::pow(width, dim)), -1);
+  int n_slots = 0;
+  for (std::size_t k = 0; k < o_slot.size(); ++k) {
+    Vec o;
+    std::size_t q = k;
+    for (int a = 0; a < dim; ++a) {
+      o[a] = static_cast<Real>(static_cast<int>(q % static_cast<std::size_t>(width)) - o_range);
+      q /= static_cast<std::size_t>(width);
     }
-  const std::size_t ns = n();
+    const Real r = o.norm() * dp;
+    if (r > 0 && weight(r, re) > 0) o_slot[k] = n_slots++;
+  }
+  if (n_slots > 52)
+    throw SetupError(fmt::format("{}: solid.re = {} gives {} bonds per particle; at most 52 are supported", setup.origin,
+                                 solid.re, n_slots));
 
+  f_x0 = &p.add_vector_field(internal::x0);
+  f_inv_n0 = &p.add_scalar_field(internal::inv_n0);
+  f_bonds0 = &p.add_scalar_field(internal::n_bonds0);
+  f_broken = &p.add_scalar_field(internal::broken);
+  f_pn = &p.add_scalar_field(internal::pn);
+  f_label = &p.add_scalar_field(internal::label);
+  if (corrected)
+    for (int c = 0; c < 3; ++c) f_coef[c] = &p.add_scalar_field(internal::coef[c]);
   f_theta = &p.add_scalar_field("rotation");
   f_omega = &p.add_scalar_field("angular_velocity");
   f_von_mises = &p.add_scalar_field("von_mises");
@@ -213,363 +320,488 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles) : p(par
   f_displacement = &p.add_vector_field("displacement");
   f_load = &p.add_vector_field(solid_fields::load);
 
-  x.resize(ns);
-  v.resize(ns);
-  x0.resize(ns);
-  force.assign(ns, Vec::Zero());
-  rotation.resize(ns);
-  for (auto* a : {&omega, &torque, &tr, &pn, &ch, &sh, &mass, &inertia, &lambda, &mu, &inv_n0, &n_now, &eps_max})
-    a->assign(ns, 0);
-  clamped.assign(ns, 0);
-  surface.assign(ns, 0);
-  fragment.assign(ns, 0);
-  uf_parent.resize(ns);
-
-  std::vector<LameConstants> lame;
-  for (const auto& m : setup.materials) lame.push_back(lame_constants(m, solid));
-  Real mu_max = 0;
-  for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(pid[k]);
-    const int mat = p.material[i];
-    if (mat < 0 || mat >= static_cast<int>(setup.materials.size()))
-      throw SetupError(fmt::format("{}: solid particle {} has no solid material", setup.origin, p.global_id[i]));
-    const auto& m = setup.materials[static_cast<std::size_t>(mat)];
-    x0[k] = p.position[i];
-    mass[k] = m.rho * volume;
-    inertia[k] = m.rho * volume * dp * dp / 6;  // eq. 44
-    lambda[k] = lame[static_cast<std::size_t>(mat)].lambda;
-    mu[k] = lame[static_cast<std::size_t>(mat)].mu;
-    mu_max = std::max(mu_max, mu[k]);
-    c_p_max = std::max(c_p_max, p_wave_speed(m, solid));
-    eps_max[k] = m.fracture_strain ? *m.fracture_strain : std::numeric_limits<Real>::infinity();
-    clamped[k] = p.clamped[i];
-    if (!(lambda[k] + 2 * mu[k] > 0) || !(mu[k] > 0))
-      throw SetupError(fmt::format("{}: solid material '{}': expected mu > 0 and lambda + 2 mu > 0 (check vp > sqrt(2) vs)",
-                                  setup.origin, m.name));
+  // Ghosts of the initial scene (positions = reference positions) within the halo.
+  if (dist && dist->n_ranks() > 1) {
+    p.drop_ghosts();
+    dist->build_ghosts(p);
   }
-  breakable = std::any_of(eps_max.begin(), eps_max.end(), [](const Real e) { return std::isfinite(e); });
+
+  std::string error;
+  std::vector<LameConstants> lame;
+  for (const auto& m : setup.materials) {
+    lame.push_back(lame_constants(m, solid));
+    MaterialConstants c;
+    c.lambda = lame.back().lambda;
+    c.mu = lame.back().mu;
+    c.mass = m.rho * volume;
+    c.inertia = m.rho * volume * dp * dp / 6;  // eq. 44
+    c.eps_max = m.fracture_strain ? *m.fracture_strain : std::numeric_limits<Real>::infinity();
+    mat.push_back(c);
+  }
+  Real mu_max = 0;
+  std::vector<std::uint8_t> used(mat.size(), 0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!is_solid(i)) continue;
+    const int m = p.material[i];
+    if (m < 0 || m >= static_cast<int>(setup.materials.size())) {
+      if (error.empty()) error = fmt::format("{}: solid particle {} has no solid material", setup.origin, p.global_id[i]);
+      continue;
+    }
+    used[static_cast<std::size_t>(m)] = 1;
+    (*f_x0)[i] = p.position[i];
+  }
+  error = agreed(comm, error);
+  if (!error.empty()) throw SetupError(error);
+  allreduce(used.data(), static_cast<int>(used.size()), MPI_UINT8_T, MPI_MAX);
+  for (std::size_t m = 0; m < mat.size(); ++m) {
+    if (!used[m]) continue;
+    mu_max = std::max(mu_max, mat[m].mu);
+    c_p_max = std::max(c_p_max, p_wave_speed(setup.materials[m], solid));
+    if (std::isfinite(mat[m].eps_max)) breakable = true;
+    if (!(mat[m].lambda + 2 * mat[m].mu > 0) || !(mat[m].mu > 0))
+      throw SetupError(fmt::format("{}: solid material '{}': expected mu > 0 and lambda + 2 mu > 0 (check vp > sqrt(2) vs)",
+                                   setup.origin, setup.materials[m].name));
+  }
 
   // Initial spin: a body given an angular velocity rotates rigidly, so its particles spin with it.
-  for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(pid[k]);
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (!is_solid(i)) continue;
     const std::string& body = p.bodies[p.body[i]].name;
     for (const auto& b : setup.spins)
-      if (b.body == body && !clamped[k]) omega[k] = b.angular_velocity;
-    (*f_omega)[i] = omega[k];
+      if (b.body == body && !p.clamped[i]) (*f_omega)[i] = b.angular_velocity;
     (*f_theta)[i] = 0;
   }
 
-  // Bonds: reference neighbours within re of the same body (eq. 25, r0 and w0 fixed).
+  // Reference bonds of the owned particles: neighbours within re of the same body (eq. 25, r0 and w0 fixed);
+  // n0_i is eq. 8's number density over them.
+  std::vector<LocalIndex> all;
+  std::vector<Vec> x0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (is_solid(i)) {
+      all.push_back(static_cast<LocalIndex>(i));
+      x0.push_back((*f_x0)[i]);
+    }
   NeighbourList nl;
   build_neighbour_list(x0, re, nl);
-  std::vector<Real> n0(ns, 0);
-  b_off.assign(ns + 1, 0);
-  for (std::size_t i = 0; i < ns; ++i) {
-    b_off[i] = b_j.size();
-    const auto body_i = p.body[static_cast<std::size_t>(pid[i])];
-    const auto same_body = [&](const std::size_t j) { return p.body[static_cast<std::size_t>(pid[j])] == body_i; };
-    // The pair loop of the operator layer: n0_i is eq. 8's number density over the bonds.
-    for_each_pair(x0, nl, re, i, same_body, [&](const std::size_t j, const Vec& r0, Real, const Real w0) {
+  std::vector<Real> n0(p.size(), 0);
+  Real n_max_local = 0;
+  for (std::size_t q = 0; q < all.size(); ++q) {
+    const auto i = static_cast<std::size_t>(all[q]);
+    if (i >= p.n_owned()) continue;
+    const auto same_body = [&](const std::size_t r) { return p.body[static_cast<std::size_t>(all[r])] == p.body[i]; };
+    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+    int count = 0;
+    for_each_pair(x0, nl, re, q, same_body, [&](std::size_t, const Vec& r0, Real, const Real w0) {
       n0[i] += w0;
-      if (j < i) return;
-      b_j.push_back(static_cast<LocalIndex>(j));
-      b_r0.push_back(r0);
-      b_inv_r0.push_back(1 / r0.norm());
-      b_wr.push_back(w0 / r0.norm());
-      b_w0.push_back(w0);
+      ++count;
+      if (slot_of(r0) < 0 && error.empty())
+        error = fmt::format("{}: body '{}' is not on a lattice of spacing dp = {} m (solid particles {} and a neighbour "
+                            "at ({:.6g}, {:.6g}) m): the solid's bonds follow the lattice offsets",
+                            setup.origin, p.bodies[p.body[i]].name, dp, p.global_id[i], r0[0], r0[1]);
+      const Vec e = r0.normalized();
+      const Eigen::Vector3d row(e[0] * e[0], e[1] * e[1], e[0] * e[1]);      // e e^T as (xx, yy, xy)
+      const Eigen::Vector3d col(e[0] * e[0], e[1] * e[1], 2 * e[0] * e[1]);  // e^T B e = col . (Bxx, Byy, Bxy)
+      m += w0 * row * col.transpose();
     });
-  }
-  b_off[ns] = b_j.size();
-  n_max = 0;
-  for (std::size_t i = 0; i < ns; ++i) {
-    n_max = std::max(n_max, n0[i]);
+    (*f_bonds0)[i] = count;
+    n_max_local = std::max(n_max_local, n0[i]);
+    const SolidNormalisation norm = solid.normalisation;
     const Real n0_used = norm == SolidNormalisation::particle ? n0[i] : norm == SolidNormalisation::lattice ? n0_lattice : 0.5 * (n0[i] + n0_lattice);
-    inv_n0[i] = n0_used > 0 ? 1 / n0_used : 0;
-    n_now[i] = n0[i];
-  }
-  n_max = std::max(n_max, n0_lattice);
-  for (std::size_t i = 0; i < ns; ++i) {
-    surface[i] = n0[i] < n_max - n_c;
-    (*f_surface)[static_cast<std::size_t>(pid[i])] = surface[i];
-  }
-  b_k.resize(b_j.size());
-  for (std::size_t i = 0; i < ns; ++i) {
-    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
-      const auto j = static_cast<std::size_t>(b_j[b]);
-      assert(j > i && "bonds are stored once, at the smaller index");
-      assert(mu[i] == mu[j] && "bonds join particles of one body and material");
-      // Force on i: V 2d/n0 2 mu u/|r0| w0/|r0| with 1/n0 -> (1/n0_i + 1/n0_j)/2 (eq. 36-37).
-      b_k[b] = volume * 2 * dim * mu[i] * b_wr[b] * b_inv_r0[b] * (inv_n0[i] + inv_n0[j]);
+    (*f_inv_n0)[i] = n0_used > 0 ? 1 / n0_used : 0;
+    if (corrected) {
+      // B_i with sum_j w0 (e0^T B_i e0) e0 e0^T = I over i's bonds; too few bond directions (a particle with
+      // bonds along one line): NaN, eq. 30 is kept.
+      const Eigen::FullPivLU<Eigen::Matrix3d> lu(m);
+      const bool ok = lu.rank() == 3 && std::abs(lu.determinant()) > 1e-9 * std::pow(m.norm(), 3);
+      const Eigen::Vector3d coef = ok ? Eigen::Vector3d(lu.solve(Eigen::Vector3d(1, 1, 0)))
+                                      : Eigen::Vector3d::Constant(std::numeric_limits<Real>::quiet_NaN());
+      for (int c = 0; c < 3; ++c) (*f_coef[c])[i] = coef[c];
     }
   }
-  set_volumetric_weights(solid.volumetric_strain == VolumetricStrain::corrected);
-  b_intact.assign(b_j.size(), 1);
-  b_ce.assign(b_j.size(), Vec::Zero());
+  error = agreed(comm, error);
+  if (!error.empty()) throw SetupError(error);
+  allreduce(&n_max_local, 1, MPI_DOUBLE, MPI_MAX);
+  n_max = std::max(n_max_local, n0_lattice);
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (is_solid(i)) (*f_surface)[i] = n0[i] < n_max - n_c;
 
   // Contact spring: contact_stiffness times the stiffness of a nearest-neighbour bond of the stiffest material.
   k_contact = solid.contact_stiffness * volume * 4 * dim * mu_max * weight(dp, re) / (dp * dp * n0_lattice);
 
+  // Loads: checked here over all ranks; their members follow the particles (renew_structure).
   for (const auto& ls : setup.loads) {
-    Load load{ls, {}};
-    bool body_found = false;
-    for (std::size_t k = 0; k < ns; ++k) {
-      const auto i = static_cast<std::size_t>(pid[k]);
-      if (p.bodies[p.body[i]].name != ls.body) continue;
-      body_found = true;
-      if (ls.region.contains(x0[k])) load.members.push_back(static_cast<LocalIndex>(k));
+    unsigned long long counts[2] = {0, 0};  // particles of the body, of the body in the region
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (!is_solid(i) || p.bodies[p.body[i]].name != ls.body) continue;
+      ++counts[0];
+      if (ls.region.contains((*f_x0)[i])) ++counts[1];
     }
-    if (!body_found)
+    allreduce(counts, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
+    if (counts[0] == 0)
       throw SetupError(fmt::format("{}: solid load '{}': body '{}' is not a solid body with particles", setup.origin,
-                                  ls.name, ls.body));
-    if (load.members.empty())
+                                   ls.name, ls.body));
+    if (counts[1] == 0)
       throw SetupError(fmt::format("{}: solid load '{}': no particle of body '{}' lies in its region", setup.origin,
-                                  ls.name, ls.body));
+                                   ls.name, ls.body));
     const Real norm = ls.direction.norm();
     if (!(norm > 0)) throw SetupError(fmt::format("{}: solid load '{}': direction must be non-zero", setup.origin, ls.name));
+    Load load{ls, {}};
     load.spec.direction /= norm;
     loads.push_back(std::move(load));
   }
-  // Seismic sources: the force pattern over the body's particles around the source point.
+  // Seismic sources: the force pattern over the body's particles around the source point, built from the
+  // candidates of every rank (gathered, in order of global id) so that it is the same on any rank count.
   for (const auto& ss : setup.sources) {
-    std::vector<std::size_t> candidates;
-    for (std::size_t k = 0; k < ns; ++k)
-      if (p.bodies[p.body[static_cast<std::size_t>(pid[k])]].name == ss.body) candidates.push_back(k);
-    if (candidates.empty())
+    std::vector<double> mine;  // (gid, x0...) of this rank's owned candidates within the source radius
+    unsigned long long n_body = 0;
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (!is_solid(i) || p.bodies[p.body[i]].name != ss.body) continue;
+      ++n_body;
+      if (((*f_x0)[i] - ss.position).norm() > ss.radius * (1 + 1e-9) + dp) continue;
+      mine.push_back(static_cast<double>(p.global_id[i]));
+      for (int a = 0; a < dim; ++a) mine.push_back((*f_x0)[i][a]);
+    }
+    allreduce(&n_body, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
+    if (n_body == 0)
       throw SetupError(fmt::format("{}: source '{}': body '{}' is not a solid body with particles", setup.origin, ss.name,
-                                  ss.body));
-    const VectorStencil st = source_stencil(ss, x0, candidates);
-    Source src{ss, {}, st.value};
-    for (const std::size_t k : st.index) src.members.push_back(static_cast<LocalIndex>(k));
+                                   ss.body));
+    std::vector<double> gathered = mine;
+    if (comm != MPI_COMM_NULL && n_ranks() > 1) {
+      const int n_mine = static_cast<int>(mine.size());
+      std::vector<int> counts(static_cast<std::size_t>(n_ranks())), displs(counts.size(), 0);
+      MPI_Allgather(&n_mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+      for (std::size_t r = 1; r < counts.size(); ++r) displs[r] = displs[r - 1] + counts[r - 1];
+      gathered.resize(static_cast<std::size_t>(displs.back() + counts.back()));
+      MPI_Allgatherv(mine.data(), n_mine, MPI_DOUBLE, gathered.data(), counts.data(), displs.data(), MPI_DOUBLE, comm);
+    }
+    std::vector<std::pair<GlobalId, Vec>> cand;
+    for (std::size_t q = 0; q < gathered.size(); q += 1 + dim) {
+      Vec x;
+      for (int a = 0; a < dim; ++a) x[a] = gathered[q + 1 + static_cast<std::size_t>(a)];
+      cand.emplace_back(static_cast<GlobalId>(gathered[q]), x);
+    }
+    std::sort(cand.begin(), cand.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<Vec> cx;
+    std::vector<std::size_t> ck;
+    for (const auto& c : cand) {
+      ck.push_back(cx.size());
+      cx.push_back(c.second);
+    }
+    const VectorStencil st = source_stencil(ss, cx, ck);
+    Source src{ss, {}, st.value, {}};
+    for (const std::size_t k : st.index) src.id.push_back(cand[k].first);
     sources.push_back(std::move(src));
   }
-  s_x.reserve(ns);
-  s_k.reserve(ns);
+  // The ghosts get the reference data of their owners.
+  std::vector<std::string> reference = {internal::x0, internal::inv_n0, internal::n_bonds0, "rotation", "angular_velocity",
+                                        solid_fields::surface};
+  if (corrected)
+    for (const char* c : internal::coef) reference.emplace_back(c);
+  exchange(reference);
+  renew_structure();
 }
 
-void SolidSolver::Impl::gather() {
-  // Another module may have reordered the particle set (ParticleSet::reorder) or removed particles
-  // (the fluid removes particles that leave the domain; solid particles are never removed): follow
-  // the global ids. Bonds refer to solid indices k, which do not change.
-  bool moved = p.size() != n_total;
-  n_total = p.size();
-  for (std::size_t k = 0; k < n() && !moved; ++k) moved = p.global_id[static_cast<std::size_t>(pid[k])] != gid[k];
-  if (moved) {
-    for (std::size_t k = 0; k < n(); ++k) {
-      pid[k] = p.local_index(gid[k]);
-      if (pid[k] < 0) throw std::logic_error("SolidSolver: a solid particle disappeared from the particle set");
+bool SolidSolver::Impl::set_changed() const {
+  if (p.size() != seen_gid.size() || p.n_owned() != seen_owned) return true;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.global_id[i] != seen_gid[i]) return true;
+  return false;
+}
+
+void SolidSolver::Impl::sync() {
+  if (dist && dist->n_ranks() > 1) {
+    if (dist->needs_rebuild(p)) {
+      p.drop_ghosts();
+      dist->migrate(p);
+      dist->build_ghosts(p);
+    } else {
+      dist->exchange_ghosts(p, {"position", "velocity", "rotation", solid_fields::surface});
     }
   }
-  for (std::size_t k = 0; k < n(); ++k) {
-    const auto i = static_cast<std::size_t>(pid[k]);
-    x[k] = p.position[i];
-    v[k] = p.velocity[i];
-    rotation[k] = Rotation((*f_theta)[i]);
-    omega[k] = (*f_omega)[i];
-  }
+  if (set_changed()) renew_structure();
 }
 
-void SolidSolver::Impl::scatter() {
-  for (std::size_t k = 0; k < n(); ++k) {
-    const auto i = static_cast<std::size_t>(pid[k]);
-    p.position[i] = x[k];
-    p.velocity[i] = v[k];
-    (*f_theta)[i] = rotation[k].angle();
-    (*f_omega)[i] = omega[k];
-    (*f_surface)[i] = surface[k];  // eq. 48, current after every step (the coupling reads it)
+void SolidSolver::Impl::renew_structure() {
+  seen_gid = p.global_id;
+  seen_owned = p.n_owned();
+  own.clear();
+  local.clear();
+  std::vector<Vec> x0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!is_solid(i)) continue;
+    if (i < p.n_owned()) own.push_back(static_cast<LocalIndex>(i));
+    local.push_back(static_cast<LocalIndex>(i));
+    x0.push_back((*f_x0)[i]);
+  }
+  const std::size_t ns = n();
+  NeighbourList nl;
+  build_neighbour_list(x0, re, nl);
+  b_off.assign(ns + 1, 0);
+  b_j.clear();
+  b_r0.clear();
+  b_inv_r0.clear();
+  b_wr.clear();
+  b_k.clear();
+  b_w0.clear();
+  b_vi.clear();
+  b_slot_i.clear();
+  b_slot_j.clear();
+  std::vector<std::pair<GlobalId, LocalIndex>> partners;
+  std::string error;
+  // own[k] is local[k] (owned particles come first in both lists).
+  for (std::size_t k = 0; k < ns; ++k) {
+    const auto i = static_cast<std::size_t>(own[k]);
+    b_off[k] = b_j.size();
+    partners.clear();
+    for (std::size_t q = nl.begin(k); q < nl.end(k); ++q) {
+      const auto j = static_cast<std::size_t>(local[static_cast<std::size_t>(nl.index[q])]);
+      if (p.body[j] == p.body[i] && in_support(((*f_x0)[j] - (*f_x0)[i]).squaredNorm(), re))
+        partners.emplace_back(p.global_id[j], static_cast<LocalIndex>(j));
+    }
+    std::sort(partners.begin(), partners.end());
+    const std::uint64_t broken = broken_bits(i);
+    const Real inv_n0_i = (*f_inv_n0)[i];
+    const MaterialConstants& mi = material_of(i);
+    for (const auto& [gj, jl] : partners) {
+      const auto j = static_cast<std::size_t>(jl);
+      const Vec r0 = (*f_x0)[j] - (*f_x0)[i];
+      const int slot_i = slot_of((*f_x0)[j] - (*f_x0)[i]), slot_j = slot_of((*f_x0)[i] - (*f_x0)[j]);
+      assert(slot_i >= 0 && slot_j >= 0 && "bonds join lattice neighbours (checked at setup)");
+      if (broken & (std::uint64_t{1} << slot_i)) continue;
+      assert(!(broken_bits(j) & (std::uint64_t{1} << slot_j)) && "a bond is broken on both sides or on neither");
+      const Real len = r0.norm();
+      const Real w0 = re / len - 1;
+      b_j.push_back(jl);
+      b_r0.push_back(r0);
+      b_inv_r0.push_back(1 / len);
+      b_wr.push_back(w0 / len);
+      b_w0.push_back(w0);
+      b_slot_i.push_back(static_cast<std::uint8_t>(slot_i));
+      b_slot_j.push_back(static_cast<std::uint8_t>(slot_j));
+      // Force on i: V 2d/n0 2 mu u/|r0| w0/|r0| with 1/n0 -> (1/n0_i + 1/n0_j)/2 (eq. 36-37).
+      b_k.push_back(volume * 2 * dim * mi.mu * (w0 / len) / len * (inv_n0_i + (*f_inv_n0)[j]));
+      // Volumetric strain weight of i (eq. 30): d/n0_i w0/|r0|, or with corrected weights w0/|r0| e0^T B_i e0.
+      Real vi = dim * inv_n0_i * w0 / len;
+      if (corrected && !std::isnan((*f_coef[0])[i])) {
+        const Vec e = r0 / len;
+        vi = w0 / len * ((*f_coef[0])[i] * e[0] * e[0] + (*f_coef[1])[i] * e[1] * e[1] + 2 * (*f_coef[2])[i] * e[0] * e[1]);
+      }
+      b_vi.push_back(vi);
+    }
+    // Every intact bond of the reference configuration must be in reach: a missing partner would silently
+    // free the particle.
+    const std::size_t n_intact = b_j.size() - b_off[k];
+    const auto expected = static_cast<std::size_t>((*f_bonds0)[i]) - static_cast<std::size_t>(__builtin_popcountll(broken));
+    if (n_intact < expected && error.empty())
+      error = fmt::format("solid: particle {} has {} of its {} intact bonds within reach on rank {}: a bonded neighbour is "
+                          "farther than the halo ({:.3g} m); the body was stretched beyond its bonds' range (the run went "
+                          "unstable; reduce dt)",
+                          p.global_id[i], n_intact, expected, dist ? dist->rank() : 0,
+                          dist ? dist->settings().halo_width : 0.0);
+  }
+  b_off[ns] = b_j.size();
+  // Thrown on this rank alone (renewals are local: a rank's set may change while another's does not); the run
+  // loop stops every rank on an exception within a step.
+  if (!error.empty()) throw std::runtime_error(error);
+  b_intact.assign(b_j.size(), 1);
+  b_ce.assign(b_j.size(), Vec::Zero());
+  force.assign(ns, Vec::Zero());
+  torque.assign(ns, Angular{});
+  tr.assign(ns, 0);
+  new_surface.assign(ns, 0);
+  ch.assign(p.size(), 1);
+  sh.assign(p.size(), 0);
+  // Loads and sources: members among the owned particles.
+  for (auto& load : loads) {
+    load.members.clear();
+    for (std::size_t k = 0; k < ns; ++k) {
+      const auto i = static_cast<std::size_t>(own[k]);
+      if (p.bodies[p.body[i]].name == load.spec.body && load.spec.region.contains((*f_x0)[i])) load.members.push_back(k);
+    }
+  }
+  for (auto& src : sources) {
+    src.members.clear();
+    for (std::size_t q = 0; q < src.id.size(); ++q) {
+      const LocalIndex i = p.local_index(src.id[q]);
+      if (i >= 0 && static_cast<std::size_t>(i) < p.n_owned())
+        src.members.emplace_back(static_cast<std::size_t>(std::lower_bound(own.begin(), own.end(), i) - own.begin()), q);
+    }
   }
 }
 
 void SolidSolver::Impl::compute_half_angles() {
-  for (std::size_t k = 0; k < n(); ++k) {
-    ch[k] = std::cos(0.5 * rotation[k].angle());
-    sh[k] = std::sin(0.5 * rotation[k].angle());
+  for (const LocalIndex li : local) {
+    const auto i = static_cast<std::size_t>(li);
+    ch[i] = std::cos(0.5 * (*f_theta)[i]);
+    sh[i] = std::sin(0.5 * (*f_theta)[i]);
   }
-}
-
-void SolidSolver::Impl::set_volumetric_weights(const bool corrected) {
-  const std::size_t nb = b_j.size();
-  b_vi.resize(nb);
-  b_vj.resize(nb);
-  for (std::size_t i = 0; i < n(); ++i)
-    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
-      b_vi[b] = dim * inv_n0[i] * b_wr[b];
-      b_vj[b] = dim * inv_n0[static_cast<std::size_t>(b_j[b])] * b_wr[b];
-    }
-  if (!corrected) return;
-  // Per particle: the 3 x 3 system for (B_xx, B_yy, B_xy) of sum_j w0 (e^T B e) e e^T = I over its bonds.
-  std::vector<Eigen::Matrix3d> m(n(), Eigen::Matrix3d::Zero());
-  const auto add = [&](const std::size_t k, const Real w, const Vec& e) {
-    const Eigen::Vector3d row(e[0] * e[0], e[1] * e[1], e[0] * e[1]);  // e e^T as (xx, yy, xy)
-    const Eigen::Vector3d col(e[0] * e[0], e[1] * e[1], 2 * e[0] * e[1]);  // e^T B e = col . (Bxx, Byy, Bxy)
-    m[k] += w * row * col.transpose();
-  };
-  for (std::size_t i = 0; i < n(); ++i)
-    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
-      const Vec e = b_r0[b] * b_inv_r0[b];
-      add(i, b_w0[b], e);
-      add(static_cast<std::size_t>(b_j[b]), b_w0[b], e);
-    }
-  std::vector<Eigen::Vector3d> coef(n());
-  std::vector<std::uint8_t> ok(n(), 0);
-  for (std::size_t k = 0; k < n(); ++k) {
-    const Eigen::FullPivLU<Eigen::Matrix3d> lu(m[k]);
-    // Too few bond directions (a particle with bonds along one line): keep eq. 30.
-    if (lu.rank() < 3 || !(std::abs(lu.determinant()) > 1e-9 * std::pow(m[k].norm(), 3))) continue;
-    coef[k] = lu.solve(Eigen::Vector3d(1, 1, 0));
-    ok[k] = 1;
-  }
-  const auto weight_of = [&](const std::size_t k, const std::size_t b, const Real fallback) {
-    if (!ok[k]) return fallback;
-    const Vec e = b_r0[b] * b_inv_r0[b];
-    return b_wr[b] * (coef[k][0] * e[0] * e[0] + coef[k][1] * e[1] * e[1] + 2 * coef[k][2] * e[0] * e[1]);
-  };
-  for (std::size_t i = 0; i < n(); ++i)
-    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
-      b_vi[b] = weight_of(i, b, b_vi[b]);
-      b_vj[b] = weight_of(static_cast<std::size_t>(b_j[b]), b, b_vj[b]);
-    }
-}
-
-std::size_t SolidSolver::Impl::find_bond(const LocalIndex a, const LocalIndex b) const {
-  const auto lo = static_cast<std::size_t>(std::min(a, b));
-  const LocalIndex hi = std::max(a, b);
-  for (std::size_t q = b_off[lo]; q < b_off[lo + 1]; ++q)
-    if (b_j[q] == hi) return q;
-  return std::numeric_limits<std::size_t>::max();
 }
 
 void SolidSolver::Impl::contact_forces(std::size_t& n_contacts) {
+  // Surface flags as of the start of the step (the ghosts' from the exchange), so that every rank count
+  // sees the same pairs.
+  const auto& surface = *f_surface;
   s_x.clear();
-  s_k.clear();
-  for (std::size_t k = 0; k < n(); ++k) {
-    if (!surface[k]) continue;
-    s_x.push_back(x[k]);
-    s_k.push_back(static_cast<LocalIndex>(k));
+  s_i.clear();
+  for (const LocalIndex li : local) {
+    if (surface[static_cast<std::size_t>(li)] == 0) continue;
+    s_x.push_back(p.position[static_cast<std::size_t>(li)]);
+    s_i.push_back(li);
   }
+  std::string error;
+  if (s_x.size() >= 2) {
+    // Guard the cell grid: a blown-up state (dt too large) would ask for an absurd number of cells.
+    Vec lo = s_x[0], hi = s_x[0];
+    bool finite = true;
+    for (const Vec& y : s_x) {
+      finite = finite && y.allFinite();
+      lo = lo.cwiseMin(y);
+      hi = hi.cwiseMax(y);
+    }
+    const Vec cells = (hi - lo) / dp + Vec::Ones();
+    if (!finite)
+      error = "solid: a surface particle has a non-finite position; the run went unstable (reduce dt)";
+    else if (cells[0] * cells[1] > 16.0 * static_cast<Real>(s_x.size()) + 4e6)
+      error = fmt::format(
+          "solid: the surface particles spread over {:.3g} x {:.3g} m ({:.3g} contact cells of side dp for {} particles); "
+          "the run went unstable (reduce dt) or fragments flew too far apart (shrink the domain)",
+          hi[0] - lo[0], hi[1] - lo[1], cells[0] * cells[1], s_x.size());
+  }
+  if (!error.empty()) throw std::runtime_error(error);
   if (s_x.size() < 2) return;
-  // Guard the cell grid: a blown-up state (dt too large) would ask for an absurd number of cells.
-  Vec lo = s_x[0], hi = s_x[0];
-  for (const Vec& y : s_x) {
-    if (!y.allFinite()) throw std::runtime_error("solid: a surface particle has a non-finite position; the run went unstable (reduce dt)");
-    lo = lo.cwiseMin(y);
-    hi = hi.cwiseMax(y);
-  }
-  const Vec cells = (hi - lo) / dp + Vec::Ones();
-  if (cells[0] * cells[1] > 16.0 * static_cast<Real>(n()) + 4e6)
-    throw std::runtime_error(fmt::format(
-        "solid: the surface particles spread over {:.3g} x {:.3g} m ({:.3g} contact cells of side dp for {} particles); "
-        "the run went unstable (reduce dt) or fragments flew too far apart (shrink the domain)",
-        hi[0] - lo[0], hi[1] - lo[1], cells[0] * cells[1], n()));
   build_neighbour_list(s_x, dp, s_nl, s_grid);
   const Real d_min = 0.05 * dp;
-  for (std::size_t a = 0; a < s_x.size(); ++a) {
-    for (std::size_t q = s_nl.begin(a); q < s_nl.end(a); ++q) {
-      const auto c = static_cast<std::size_t>(s_nl.index[q]);
-      if (c <= a) continue;
-      const LocalIndex i = s_k[a], j = s_k[c];
-      const std::size_t b = find_bond(i, j);
-      if (b != std::numeric_limits<std::size_t>::max() && b_intact[b]) continue;  // adjacent on one surface
-      const Vec r = x[static_cast<std::size_t>(j)] - x[static_cast<std::size_t>(i)];
+  // own[k] is local[k]: the owned surface particles come first in s_i, in order of k.
+  std::size_t k = 0;
+  for (std::size_t q = 0; q < s_x.size(); ++q) {
+    const auto i = static_cast<std::size_t>(s_i[q]);
+    if (i >= p.n_owned()) break;
+    while (static_cast<std::size_t>(own[k]) != i) ++k;
+    s_pairs.clear();
+    for (std::size_t e = s_nl.begin(q); e < s_nl.end(q); ++e) {
+      const LocalIndex j = s_i[static_cast<std::size_t>(s_nl.index[e])];
+      if (bonded(k, j)) continue;  // adjacent on one surface
+      s_pairs.emplace_back(p.global_id[static_cast<std::size_t>(j)], j);
+    }
+    std::sort(s_pairs.begin(), s_pairs.end());  // the same sum in the same order on any rank count
+    for (const auto& [gj, jl] : s_pairs) {
+      const auto j = static_cast<std::size_t>(jl);
+      // Pair in order of global id (a, b): both ends compute the same force.
+      const bool i_first = p.global_id[i] < gj;
+      const std::size_t a = i_first ? i : j, c = i_first ? j : i;
+      const Vec r = p.position[c] - p.position[a];
       const Real d = r.norm();
       // Direction: along r; for coincident particles fall back to the reference direction.
-      Vec e = d > 1e-12 * dp ? Vec(r / d) : Vec(x0[static_cast<std::size_t>(j)] - x0[static_cast<std::size_t>(i)]);
+      Vec e = d > 1e-12 * dp ? Vec(r / d) : Vec((*f_x0)[c] - (*f_x0)[a]);
       if (d <= 1e-12 * dp) e = e.norm() > 0 ? Vec(e.normalized()) : Vec(1, 0);
       // Repulsion k (l0 - d) l0/d: linear near contact, stiffening without bound as d -> 0.
       const Real mag = k_contact * (dp - d) * dp / std::max(d, d_min);
-      force[static_cast<std::size_t>(i)] -= mag * e;
-      force[static_cast<std::size_t>(j)] += mag * e;
-      ++n_contacts;
+      force[k] -= (i_first ? mag : -mag) * e;
+      if (i_first) ++n_contacts;
     }
   }
 }
 
 SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
-  gather();
+  sync();
   compute_half_angles();
   const std::size_t ns = n();
   std::fill(force.begin(), force.end(), Vec::Zero());
-  std::fill(torque.begin(), torque.end(), 0.0);
+  std::fill(torque.begin(), torque.end(), Angular{});
   std::fill(tr.begin(), tr.end(), 0.0);
+  std::fill(new_surface.begin(), new_surface.end(), 0);
+  unsigned long long counts[2] = {0, 0};  // bonds broken in this step, contacts
 
   // Pass 1: bond displacement (eq. 25-29), fracture (eq. 47), volumetric strain sums (eq. 30),
-  // normal + shear forces (eq. 36-37) and the torques that cancel the shear couple (eq. 41-43).
+  // normal + shear forces (eq. 36-37) and the torques that cancel the shear couple (eq. 41-43). Each rank
+  // computes its own particles' bonds; both ends of a bond see the same numbers bit for bit (bond_state), so
+  // a bond breaks on both sides in the same step and the two forces are exactly opposite.
   const Real vd = volume * dim;
-  for (std::size_t i = 0; i < ns; ++i) {
-    const Vec xi = x[i];
+  for (std::size_t k = 0; k < ns; ++k) {
+    const auto i = static_cast<std::size_t>(own[k]);
+    const Real eps_max = material_of(i).eps_max;
     Vec fi = Vec::Zero();
-    Real ti = 0, tri = 0;
-    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+    Angular ti{};
+    Real tri = 0;
+    bool broke = false;
+    for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
       if (!b_intact[b]) continue;
       const auto j = static_cast<std::size_t>(b_j[b]);
-      const Vec r = x[j] - xi;
-      const Vec u = bond_displacement(i, j, b);
+      Vec r, u;
+      bond_state(i, b, r, u);
       const Real inv_r = 1 / std::sqrt(r.squaredNorm());
-      const Real un = u.dot(r) * inv_r;  // |(u_ij)_n| with sign (eq. 26)
-      if (un * b_inv_r0[b] > eps_max[i]) {  // eq. 47: the bond breaks for good
+      const Real un = u.dot(r) * inv_r;  // |(u_ij)_n| with sign (eq. 26), the same from either end
+      if (un * b_inv_r0[b] > eps_max) {  // eq. 47: the bond breaks for good
         b_intact[b] = 0;
-        ++n_broken;
-        n_now[i] -= b_w0[b];
-        n_now[j] -= b_w0[b];
-        assert(n_now[i] > -1e-9 && n_now[j] > -1e-9 && "n_i is a sum over intact bonds");
-        if (n_now[i] < n_max - n_c) surface[i] = 1;  // eq. 48, irreversible
-        if (n_now[j] < n_max - n_c) surface[j] = 1;
+        set_broken_bit(i, b_slot_i[b]);
+        broke = true;
+        if (p.global_id[i] < p.global_id[j]) ++counts[0];
         continue;
       }
       tri += b_vi[b] * un;
-      tr[j] += b_vj[b] * un;
       Vec fe = b_k[b] * u;  // sigma_ij + tau_ij term, force on i
       // Kelvin-Voigt bond damping: eta times the bond's normal stretch rate, same stiffness; rigid
       // translation and rotation give no normal stretch rate and are not damped.
-      if (damping_time > 0) fe += (b_k[b] * damping_time * (v[j] - v[i]).dot(r) * inv_r * inv_r) * r;
+      if (damping_time > 0) fe += (b_k[b] * damping_time * (p.velocity[j] - p.velocity[i]).dot(r) * inv_r * inv_r) * r;
       fi += fe;
-      force[j] -= fe;
-      const Real tq = 0.5 * cross(r, fe);  // -1/2 M_ij, M_ij = -r_ij x F_ij (eq. 42-43), same for j
-      ti += tq;
-      torque[j] += tq;
+      ti += 0.5 * cross(r, fe);  // -1/2 M_ij, M_ij = -r_ij x F_ij (eq. 42-43), the same for both ends
       b_ce[b] = (vd * b_wr[b] * inv_r) * r;
     }
-    force[i] += fi;
-    torque[i] += ti;
-    tr[i] += tri;
+    force[k] = fi;
+    torque[k] = ti;
+    tr[k] = tri;
+    if (broke) {  // eq. 48 over the intact bonds, irreversible
+      Real n_now = 0;
+      for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b)
+        if (b_intact[b]) n_now += b_w0[b];
+      new_surface[k] = n_now < n_max - n_c;
+    }
   }
-  // Pressure p_i = -lambda tr(eps)_i (eq. 30, 33); pn holds p_i / n0_i.
-  for (std::size_t i = 0; i < ns; ++i) pn[i] = -lambda[i] * tr[i] * inv_n0[i];
+  // Pressure p_i = -lambda tr(eps)_i (eq. 30, 33); pn holds p_i / n0_i, which the ghosts need.
+  auto& pn = *f_pn;
+  for (std::size_t k = 0; k < ns; ++k) {
+    const auto i = static_cast<std::size_t>(own[k]);
+    pn[i] = -material_of(i).lambda * tr[k] * (*f_inv_n0)[i];
+  }
+  exchange({internal::pn});
   // Pass 2: pressure term (eq. 38) in the pair form -V d w0/|r0| (p_i/n0_i + p_j/n0_j) e_ij. With the eq. 30
   // weights this is the gradient of sum_i V lambda tr_i^2 / 2. With corrected weights (exact trace) the force
   // keeps these weights: at a flat free surface the pressure then balances the bonds' normal force exactly
   // when sigma_yy = 0 (a uniform traction-free strain is an equilibrium, docs/validation.md), at the price of
   // a pressure force that is no longer exactly an energy gradient near surfaces.
-  for (std::size_t i = 0; i < ns; ++i) {
+  for (std::size_t k = 0; k < ns; ++k) {
+    const auto i = static_cast<std::size_t>(own[k]);
     Vec fi = Vec::Zero();
-    const Real pi = pn[i];
-    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+    for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
       if (!b_intact[b]) continue;
-      const auto j = static_cast<std::size_t>(b_j[b]);
-      const Vec g = (pi + pn[j]) * b_ce[b];
-      fi -= g;
-      force[j] += g;
+      fi -= (pn[i] + pn[static_cast<std::size_t>(b_j[b])]) * b_ce[b];
     }
-    force[i] += fi;
+    force[k] += fi;
   }
 
   SolidStepReport report;
-  contact_forces(report.n_contacts);
+  std::size_t n_contacts = 0;
+  contact_forces(n_contacts);
+  counts[1] = n_contacts;
+  for (std::size_t k = 0; k < ns; ++k)
+    if (new_surface[k]) (*f_surface)[static_cast<std::size_t>(own[k])] = 1;
 
   // External loads: gravity, the coupling's per-particle force, pressure pulses, seismic sources.
   const bool has_gravity = gravity.squaredNorm() > 0;
   for (std::size_t k = 0; k < ns; ++k) {
-    if (has_gravity) force[k] += mass[k] * gravity;
-    force[k] += (*f_load)[static_cast<std::size_t>(pid[k])];
+    const auto i = static_cast<std::size_t>(own[k]);
+    if (has_gravity) force[k] += material_of(i).mass * gravity;
+    force[k] += (*f_load)[i];
   }
   for (const auto& load : loads) {
     const Real arg = (t - load.spec.time) / load.spec.width;
     const Vec f = load.spec.peak * std::exp(-arg * arg) * std::pow(dp, dim - 1) * load.spec.direction;
-    for (const auto k : load.members) force[static_cast<std::size_t>(k)] += f;
+    for (const std::size_t k : load.members) force[k] += f;
   }
   for (const auto& src : sources) {
     const Real a = src.spec.amplitude * wavelet_value(src.spec.wavelet, t);
     if (a == 0) continue;
-    for (std::size_t q = 0; q < src.members.size(); ++q) force[static_cast<std::size_t>(src.members[q])] += a * src.g[q];
+    for (const auto& [k, q] : src.members) force[k] += a * src.g[q];
   }
 
   // Symplectic Euler (eq. 39-40, 45-46); clamped particles are attached to the tank: they follow its
@@ -577,73 +809,94 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   Real v2_max = 0;
   const auto [tank_theta, tank_omega] = tank.at(t + dt);
   for (std::size_t k = 0; k < ns; ++k) {
-    if (clamped[k]) {
-      x[k] = tank.place(x0[k], tank_theta);
-      v[k] = tank.velocity_at(x[k], tank_omega);
-      rotation[k] = Rotation(tank_theta);
-      omega[k] = tank_omega;
+    const auto i = static_cast<std::size_t>(own[k]);
+    if (p.clamped[i]) {
+      p.position[i] = tank.place((*f_x0)[i], tank_theta);
+      p.velocity[i] = tank.velocity_at(p.position[i], tank_omega);
+      (*f_theta)[i] = Rotation(tank_theta).angle();
+      (*f_omega)[i] = tank_omega;
       continue;
     }
-    v[k] += (dt / mass[k]) * force[k];
-    x[k] += dt * v[k];
-    omega[k] += (dt / inertia[k]) * torque[k];
-    rotation[k] = Rotation::from_vector(dt * omega[k]) * rotation[k];  // eq. 46
-    v2_max = std::max(v2_max, v[k].squaredNorm());
+    const MaterialConstants& m = material_of(i);
+    p.velocity[i] += (dt / m.mass) * force[k];
+    p.position[i] += dt * p.velocity[i];
+    (*f_omega)[i] += (dt / m.inertia) * torque[k];
+    (*f_theta)[i] = (Rotation::from_vector(dt * (*f_omega)[i]) * Rotation((*f_theta)[i])).angle();  // eq. 46
+    v2_max = std::max(v2_max, p.velocity[i].squaredNorm());
   }
-  scatter();
+  allreduce(counts, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
+  allreduce(&v2_max, 1, MPI_DOUBLE, MPI_MAX);
+  n_broken += counts[0];
   report.n_broken = n_broken;
+  report.n_contacts = counts[1];
   report.max_speed = std::sqrt(v2_max);
   return report;
 }
 
 void SolidSolver::Impl::compute_fragments() {
-  const std::size_t ns = n();
-  std::iota(uf_parent.begin(), uf_parent.end(), 0);
-  const auto find = [&](int a) {
-    while (uf_parent[static_cast<std::size_t>(a)] != a) {
-      uf_parent[static_cast<std::size_t>(a)] = uf_parent[static_cast<std::size_t>(uf_parent[static_cast<std::size_t>(a)])];
-      a = uf_parent[static_cast<std::size_t>(a)];
+  // Connected components of the intact bonds: union-find over this rank's particles, labels = smallest
+  // global id of a component; across ranks the ghosts' labels are exchanged until no label changes.
+  sync();
+  const std::size_t nl = p.size();
+  std::vector<std::size_t> parent(nl);
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](std::size_t a) {
+    while (parent[a] != a) {
+      parent[a] = parent[parent[a]];
+      a = parent[a];
     }
     return a;
   };
-  for (std::size_t i = 0; i < ns; ++i) {
-    for (std::size_t b = b_off[i]; b < b_off[i + 1]; ++b) {
+  for (std::size_t k = 0; k < n(); ++k)
+    for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
       if (!b_intact[b]) continue;
-      const int ra = find(static_cast<int>(i)), rb = find(b_j[b]);
-      if (ra != rb) uf_parent[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+      const std::size_t ra = find(static_cast<std::size_t>(own[k])), rb = find(static_cast<std::size_t>(b_j[b]));
+      if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
     }
+  auto& label = *f_label;
+  std::vector<GlobalId> root_label(nl, std::numeric_limits<GlobalId>::max());
+  for (const LocalIndex li : local) {
+    const auto i = static_cast<std::size_t>(li);
+    auto& l = root_label[find(i)];
+    l = std::min(l, p.global_id[i]);
   }
-  // Roots in order of first particle; then label by size (largest first), ties by first particle.
-  std::vector<int> root_label(ns, -1);
-  std::vector<int> roots;
-  std::vector<std::size_t> sizes;
-  for (std::size_t i = 0; i < ns; ++i) {
-    const auto r = static_cast<std::size_t>(find(static_cast<int>(i)));
-    if (root_label[r] < 0) {
-      root_label[r] = static_cast<int>(roots.size());
-      roots.push_back(static_cast<int>(r));
-      sizes.push_back(0);
+  for (int round = 0;; ++round) {
+    for (std::size_t k = 0; k < n(); ++k) {
+      const auto i = static_cast<std::size_t>(own[k]);
+      label[i] = static_cast<Real>(root_label[find(i)]);
     }
-    fragment[i] = root_label[r];
-    ++sizes[static_cast<std::size_t>(root_label[r])];
+    if (n_ranks() == 1) break;
+    exchange({internal::label});
+    int changed = 0;
+    for (const LocalIndex li : local) {
+      const auto i = static_cast<std::size_t>(li);
+      if (i < p.n_owned()) continue;
+      auto& l = root_label[find(i)];
+      const auto g = static_cast<GlobalId>(label[i]);
+      if (g < l) {
+        l = g;
+        changed = 1;
+      }
+    }
+    allreduce(&changed, 1, MPI_INT, MPI_MAX);
+    if (!changed) break;
+    if (round > 100000) throw std::logic_error("solid: the fragment labels do not settle");
   }
-  std::vector<int> order(roots.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return sizes[static_cast<std::size_t>(a)] > sizes[static_cast<std::size_t>(b)];
-  });
-  std::vector<int> rank(roots.size());
-  for (std::size_t q = 0; q < order.size(); ++q) rank[static_cast<std::size_t>(order[q])] = static_cast<int>(q);
-  for (std::size_t i = 0; i < ns; ++i) fragment[i] = rank[static_cast<std::size_t>(fragment[i])];
-  n_frag = roots.size();
-  assert(ns == 0 || sizes[static_cast<std::size_t>(order[0])] >= sizes[static_cast<std::size_t>(order.back())]);
+  // Each fragment has one particle whose global id is its label.
+  unsigned long long n_roots = 0;
+  for (std::size_t k = 0; k < n(); ++k) {
+    const auto i = static_cast<std::size_t>(own[k]);
+    n_roots += static_cast<GlobalId>(label[i]) == p.global_id[i];
+  }
+  allreduce(&n_roots, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
+  n_frag = n_roots;
 }
 
 // ---------------------------------------------------------------------------------------------
 
-SolidSolver::SolidSolver(const SolidSetup& setup, ParticleSet& particles) : impl_(std::make_unique<Impl>(setup, particles)) {
-  impl_->compute_fragments();
-}
+SolidSolver::SolidSolver(const SolidSetup& setup, ParticleSet& particles) : impl_(std::make_unique<Impl>(setup, particles, nullptr)) {}
+SolidSolver::SolidSolver(const SolidSetup& setup, ParticleSet& particles, Distribution& distribution)
+    : impl_(std::make_unique<Impl>(setup, particles, &distribution)) {}
 SolidSolver::~SolidSolver() = default;
 
 void SolidSolver::set_damping(const Real beta) {
@@ -669,85 +922,104 @@ void SolidSolver::set_output_directory(const std::string& dir, const bool append
 }
 
 void SolidSolver::save_state(BinaryWriter& out) const {
-  const Impl& m = *impl_;
+  // Everything else the solid knows of a particle is in its particle arrays (reference position, broken bonds,
+  // surface flag, rotation), which the checkpoint holds by global id.
   out.section("solid");
-  out.array(m.gid);
-  out.array(m.b_intact);
-  out.u64(m.n_broken);
-  out.array(m.n_now);
-  out.array(m.surface);
+  out.u64(impl_->n_broken);
 }
 
 void SolidSolver::load_state(BinaryReader& in) {
-  Impl& m = *impl_;
   in.expect_section("solid");
-  const auto gid = in.array<GlobalId>("the solid particle ids");
-  if (gid != m.gid)
-    in.fail(fmt::format("the checkpoint's solid has {} particles, this case's {} (or other ones)", gid.size(), m.gid.size()));
-  auto intact = in.array<std::uint8_t>("the bond flags");
-  if (intact.size() != m.b_intact.size())
-    in.fail(fmt::format("the checkpoint's solid has {} bonds, this case's {}", intact.size(), m.b_intact.size()));
-  const std::size_t n_broken = in.u64("the broken-bond count");
-  auto n_now = in.array<Real>("the number densities", m.n());
-  auto surface = in.array<std::uint8_t>("the surface flags", m.n());
-  m.b_intact.swap(intact);
-  m.n_broken = n_broken;
-  m.n_now.swap(n_now);
-  m.surface.swap(surface);
-  m.gather();  // the particle set was replaced: follow the global ids
-  m.compute_fragments();
+  impl_->n_broken = in.u64("the broken-bond count");
+  impl_->seen_gid.clear();  // the particle set was replaced: renew the structure at the next use
 }
 
 void SolidSolver::prepare_output(const Real t) {
   Impl& m = *impl_;
-  m.gather();
+  m.compute_fragments();  // (renews owners, ghosts and bonds first)
   m.compute_half_angles();
   const std::size_t ns = m.n();
   // Strain tensor eps_i = sym(d/n0_i sum w0/|r0| u_ij (x) e_ij): its trace is eq. 30.
   std::vector<Mat> grad(ns, Mat::Zero());
-  m.for_each_intact_bond([&](std::size_t i, std::size_t j, std::size_t b, const Vec& r, const Vec& u) {
-    const Mat g = m.b_wr[b] * u * (r / r.norm()).transpose();
-    grad[i] += g;
-    grad[j] += g;  // u_ji (x) e_ji = u_ij (x) e_ij
+  m.for_each_intact_bond([&](std::size_t k, std::size_t, std::size_t, std::size_t b, const Vec& r, const Vec& u) {
+    grad[k] += m.b_wr[b] * u * (r / r.norm()).transpose();
   });
-  m.compute_fragments();
+  // Fragment numbers: labels ordered by size (largest first), ties by label (the fragment's first particle).
+  struct Sums {
+    Real count = 0, mass = 0;
+    Vec mx = Vec::Zero();
+    Real body = 0;
+  };
+  std::map<GlobalId, Sums> local_sums;
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(m.pid[k]);
-    const Mat g = dim * m.inv_n0[k] * grad[k];
+    const auto i = static_cast<std::size_t>(m.own[k]);
+    auto& s = local_sums[static_cast<GlobalId>((*m.f_label)[i])];
+    const Real mass = m.material_of(i).mass;
+    s.count += 1;
+    s.mass += mass;
+    s.mx += mass * m.p.position[i];
+    s.body = m.p.body[i];
+  }
+  const int width = 3 + dim + 1;
+  std::vector<double> mine;
+  for (const auto& [l, s] : local_sums) {
+    mine.push_back(static_cast<double>(l));
+    mine.push_back(s.count);
+    mine.push_back(s.mass);
+    for (int a = 0; a < dim; ++a) mine.push_back(s.mx[a]);
+    mine.push_back(s.body);
+  }
+  std::vector<double> all = mine;
+  if (m.comm != MPI_COMM_NULL && m.n_ranks() > 1) {
+    const int n_mine = static_cast<int>(mine.size());
+    std::vector<int> counts(static_cast<std::size_t>(m.n_ranks())), displs(counts.size(), 0);
+    MPI_Allgather(&n_mine, 1, MPI_INT, counts.data(), 1, MPI_INT, m.comm);
+    for (std::size_t r = 1; r < counts.size(); ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    all.resize(static_cast<std::size_t>(displs.back() + counts.back()));
+    MPI_Allgatherv(mine.data(), n_mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, m.comm);
+  }
+  std::map<GlobalId, Sums> sums;
+  for (std::size_t q = 0; q < all.size(); q += width) {
+    auto& s = sums[static_cast<GlobalId>(all[q])];
+    s.count += all[q + 1];
+    s.mass += all[q + 2];
+    for (int a = 0; a < dim; ++a) s.mx[a] += all[q + 3 + static_cast<std::size_t>(a)];
+    s.body = all[q + 3 + dim];
+  }
+  std::vector<std::pair<GlobalId, Sums>> order(sums.begin(), sums.end());
+  std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.second.count > b.second.count; });
+  std::map<GlobalId, int> number;
+  for (std::size_t f = 0; f < order.size(); ++f) number[order[f].first] = static_cast<int>(f);
+  m.n_frag = order.size();
+
+  for (std::size_t k = 0; k < ns; ++k) {
+    const auto i = static_cast<std::size_t>(m.own[k]);
+    const Impl::MaterialConstants& mc = m.material_of(i);
+    const Mat g = dim * (*m.f_inv_n0)[i] * grad[k];
     const Mat eps = 0.5 * (g + g.transpose());
     const Real tr_eps = eps.trace();
-    const Mat sigma = 2 * m.mu[k] * eps + m.lambda[k] * tr_eps * Mat::Identity();
-    const Real szz = m.plane_stress ? 0.0 : m.lambda[k] * tr_eps;
+    const Mat sigma = 2 * mc.mu * eps + mc.lambda * tr_eps * Mat::Identity();
+    const Real szz = m.plane_stress ? 0.0 : mc.lambda * tr_eps;
     const Real sxx = sigma(0, 0), syy = sigma(1, 1), sxy = sigma(0, 1);
     (*m.f_von_mises)[i] = std::sqrt(0.5 * ((sxx - syy) * (sxx - syy) + (syy - szz) * (syy - szz) + (szz - sxx) * (szz - sxx)) +
                                     3 * sxy * sxy);
-    (*m.f_pressure)[i] = -m.lambda[k] * tr_eps;
-    (*m.f_displacement)[i] = m.x[k] - m.x0[k];
-    (*m.f_fragment)[i] = m.fragment[k];
-    (*m.f_surface)[i] = m.surface[k];
+    (*m.f_pressure)[i] = -mc.lambda * tr_eps;
+    (*m.f_displacement)[i] = m.p.position[i] - (*m.f_x0)[i];
+    (*m.f_fragment)[i] = number[static_cast<GlobalId>((*m.f_label)[i])];
   }
-  if (m.out_dir.empty() || !m.breakable) return;
+  const bool writes = m.dist == nullptr || m.dist->rank() == 0;
+  if (m.out_dir.empty() || !m.breakable || !writes) return;
   // fragments.csv (bodies that can break): one row per fragment and output time.
-  std::vector<Real> f_mass(m.n_frag, 0);
-  std::vector<Vec> f_centroid(m.n_frag, Vec::Zero());
-  std::vector<std::size_t> f_count(m.n_frag, 0);
-  std::vector<int> f_body(m.n_frag, -1);
-  for (std::size_t k = 0; k < ns; ++k) {
-    const auto f = static_cast<std::size_t>(m.fragment[k]);
-    f_mass[f] += m.mass[k];
-    f_centroid[f] += m.mass[k] * m.x[k];
-    ++f_count[f];
-    if (f_body[f] < 0) f_body[f] = m.p.body[static_cast<std::size_t>(m.pid[k])];
-  }
   const std::string path = m.out_dir + "/fragments.csv";
   std::ofstream out(path, m.csv_started ? std::ios::app : std::ios::trunc);
   check_written(out, path, "fragment table");
   if (!m.csv_started) out << "time,n_fragments,fragment,body,particles,mass,centroid_x,centroid_y\n";
   m.csv_started = true;
-  for (std::size_t f = 0; f < m.n_frag; ++f) {
-    const Vec c = f_centroid[f] / f_mass[f];
+  for (std::size_t f = 0; f < order.size(); ++f) {
+    const auto& s = order[f].second;
+    const Vec c = s.mx / s.mass;
     out << fmt::format("{:.9g},{},{},{},{},{:.9g},{:.9g},{:.9g}\n", t, m.n_frag, f,
-                       m.p.bodies[static_cast<std::size_t>(f_body[f])].name, f_count[f], f_mass[f], c[0], c[1]);
+                       m.p.bodies[static_cast<std::size_t>(s.body)].name, static_cast<std::size_t>(s.count), s.mass, c[0], c[1]);
   }
   out.flush();
   check_written(out, path, "fragment table");
@@ -755,37 +1027,52 @@ void SolidSolver::prepare_output(const Real t) {
 
 SolidDiagnostics SolidSolver::diagnostics() const {
   Impl& m = *impl_;
-  m.gather();
+  m.sync();
   m.compute_half_angles();
   SolidDiagnostics d;
   const std::size_t ns = m.n();
   std::vector<Real> tr(ns, 0);
-  m.for_each_intact_bond([&](std::size_t i, std::size_t j, std::size_t b, const Vec& r, const Vec& u) {
-    const Real un = u.dot(r) / r.norm();
-    tr[i] += m.b_vi[b] * un;
-    tr[j] += m.b_vj[b] * un;
-    d.strain += 0.5 * m.b_k[b] * u.squaredNorm();
+  // Each bond is seen from both ends: half of its energy at each.
+  m.for_each_intact_bond([&](std::size_t k, std::size_t, std::size_t, std::size_t b, const Vec& r, const Vec& u) {
+    tr[k] += m.b_vi[b] * u.dot(r) / r.norm();
+    d.strain += 0.25 * m.b_k[b] * u.squaredNorm();
   });
+  const auto& surface = *m.f_surface;
   for (std::size_t k = 0; k < ns; ++k) {
-    const Real t = tr[k];
-    d.strain += 0.5 * m.volume * m.lambda[k] * t * t;
-    d.momentum += m.mass[k] * m.v[k];
-    d.angular_momentum += m.mass[k] * cross(m.x[k], m.v[k]) + m.inertia[k] * m.omega[k];
-    d.kinetic += 0.5 * m.mass[k] * m.v[k].squaredNorm();
-    d.rotational += 0.5 * m.inertia[k] * m.omega[k] * m.omega[k];
-  }
-  // Contact energy: U(d) = k l0 (l0 ln(l0/d) - (l0 - d)) for unbonded surface pairs closer than l0.
-  for (std::size_t i = 0; i < ns; ++i) {
-    if (!m.surface[i]) continue;
-    for (std::size_t j = i + 1; j < ns; ++j) {
-      if (!m.surface[j]) continue;
-      const Real dist = (m.x[j] - m.x[i]).norm();
-      if (dist >= m.dp) continue;
-      const std::size_t b = m.find_bond(static_cast<LocalIndex>(i), static_cast<LocalIndex>(j));
-      if (b != std::numeric_limits<std::size_t>::max() && m.b_intact[b]) continue;
-      d.contact += m.k_contact * m.dp * (m.dp * std::log(m.dp / dist) - (m.dp - dist));
+    const auto i = static_cast<std::size_t>(m.own[k]);
+    const Impl::MaterialConstants& mc = m.material_of(i);
+    const Vec& x = m.p.position[i];
+    const Vec& v = m.p.velocity[i];
+    const Real omega = (*m.f_omega)[i];
+    d.strain += 0.5 * m.volume * mc.lambda * tr[k] * tr[k];
+    d.momentum += mc.mass * v;
+    d.angular_momentum += mc.mass * cross(x, v) + mc.inertia * omega;
+    d.kinetic += 0.5 * mc.mass * v.squaredNorm();
+    d.rotational += 0.5 * mc.inertia * omega * omega;
+    // Contact energy: U(d) = k l0 (l0 ln(l0/d) - (l0 - d)) for unbonded surface pairs closer than l0, half at each end.
+    if (surface[i] == 0) continue;
+    for (const LocalIndex lj : m.local) {
+      const auto j = static_cast<std::size_t>(lj);
+      if (j == i || surface[j] == 0) continue;
+      const Real dist = (m.p.position[j] - x).norm();
+      if (dist >= m.dp || m.bonded(k, lj)) continue;
+      d.contact += 0.5 * m.k_contact * m.dp * (m.dp * std::log(m.dp / dist) - (m.dp - dist));
     }
   }
+  Real sums[dim + 5];
+  for (int a = 0; a < dim; ++a) sums[a] = d.momentum[a];
+  sums[dim] = d.angular_momentum;
+  sums[dim + 1] = d.kinetic;
+  sums[dim + 2] = d.rotational;
+  sums[dim + 3] = d.strain;
+  sums[dim + 4] = d.contact;
+  m.allreduce(sums, dim + 5, MPI_DOUBLE, MPI_SUM);
+  for (int a = 0; a < dim; ++a) d.momentum[a] = sums[a];
+  d.angular_momentum = sums[dim];
+  d.kinetic = sums[dim + 1];
+  d.rotational = sums[dim + 2];
+  d.strain = sums[dim + 3];
+  d.contact = sums[dim + 4];
   return d;
 }
 
@@ -793,32 +1080,41 @@ std::size_t SolidSolver::n_fragments() const { return impl_->n_frag; }
 
 Real SolidSolver::min_distance_between_fragments() const {
   Impl& m = *impl_;
-  m.gather();
   m.compute_fragments();
+  const auto& label = *m.f_label;
+  std::vector<Vec> x;
+  for (const LocalIndex li : m.local) x.push_back(m.p.position[static_cast<std::size_t>(li)]);
   NeighbourList nl;
-  std::vector<Vec> x(m.n());
-  for (std::size_t k = 0; k < m.n(); ++k) x[k] = m.p.position[static_cast<std::size_t>(m.pid[k])];
   build_neighbour_list(x, m.dp, nl);
   Real best = std::numeric_limits<Real>::infinity();
-  for (std::size_t i = 0; i < m.n(); ++i)
-    for (std::size_t q = nl.begin(i); q < nl.end(i); ++q) {
-      const auto j = static_cast<std::size_t>(nl.index[q]);
-      if (m.fragment[i] != m.fragment[j]) best = std::min(best, (x[j] - x[i]).norm());
+  for (std::size_t k = 0; k < m.n(); ++k) {  // own[k] is local[k]
+    const auto i = static_cast<std::size_t>(m.own[k]);
+    for (std::size_t q = nl.begin(k); q < nl.end(k); ++q) {
+      const auto j = static_cast<std::size_t>(m.local[static_cast<std::size_t>(nl.index[q])]);
+      if (label[i] != label[j]) best = std::min(best, (x[static_cast<std::size_t>(nl.index[q])] - x[k]).norm());
     }
+  }
+  m.allreduce(&best, 1, MPI_DOUBLE, MPI_MIN);
   return best;
 }
 
 std::size_t SolidSolver::n_bonds() const {
-  return static_cast<std::size_t>(std::count(impl_->b_intact.begin(), impl_->b_intact.end(), std::uint8_t{1}));
+  const Impl& m = *impl_;
+  unsigned long long n = 0;
+  for (std::size_t k = 0; k < m.n(); ++k)
+    for (std::size_t b = m.b_off[k]; b < m.b_off[k + 1]; ++b)
+      n += m.b_intact[b] && m.p.global_id[static_cast<std::size_t>(m.own[k])] < m.p.global_id[static_cast<std::size_t>(m.b_j[b])];
+  m.allreduce(&n, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
+  return n;
 }
 
 std::size_t SolidSolver::memory_bytes() const {
   const Impl& m = *impl_;
   const std::size_t ns = m.n();
   const std::size_t nb = m.b_j.size();
-  const std::size_t per_particle = sizeof(LocalIndex) + 4 * sizeof(Vec) + 14 * sizeof(Real) + 2 + sizeof(int) * 2 +
-                                   sizeof(Vec) + sizeof(LocalIndex);  // + contact scratch
-  const std::size_t per_bond = sizeof(LocalIndex) + 2 * sizeof(Vec) + 6 * sizeof(Real) + 1;
+  const std::size_t per_particle = 2 * sizeof(LocalIndex) + sizeof(Vec) + sizeof(Angular) + sizeof(Real) + 1 +
+                                   2 * sizeof(Real) + sizeof(GlobalId) + sizeof(Vec) + sizeof(LocalIndex);
+  const std::size_t per_bond = sizeof(LocalIndex) + 2 * sizeof(Vec) + 6 * sizeof(Real) + 4;
   return ns * per_particle + nb * per_bond + (ns + 1) * sizeof(std::size_t) + m.s_nl.memory_bytes();
 }
 

@@ -27,6 +27,7 @@ namespace mpsfsi {
 
 class BinaryWriter;
 class BinaryReader;
+class Distribution;
 
 struct SolidStepReport {
   std::size_t n_broken = 0;    ///< bonds broken so far
@@ -57,6 +58,9 @@ struct LameConstants {
 LameConstants lame_constants(const SolidMaterial& m, const SolidParameters& numerics);
 /// P-wave speed sqrt((lambda + 2 mu) / rho) of that law [m/s].
 Real p_wave_speed(const SolidMaterial& m, const SolidParameters& numerics);
+/// The distance within which a distributed solid needs the other ranks' particles: its bonds' range re with
+/// room for their stretch (contact, within dp, is shorter) [m]; the halo is this plus the skin.
+Real solid_interaction_radius(const SolidSetup& setup);
 
 class SolidSolver {
  public:
@@ -64,7 +68,13 @@ class SolidSolver {
   /// rotation, angular_velocity, displacement, von_mises, solid_pressure, fragment, surface, solid_load.
   /// io/ builds `setup` from a case (solid_setup). Throws SetupError (a std::invalid_argument) when the
   /// setup does not fit the particles (e.g. a load on an unknown body, a load region without particles).
+  /// This process holds the whole solid (no ghosts).
   SolidSolver(const SolidSetup& setup, ParticleSet& particles);
+  /// Distributed: `particles` holds this rank's owned particles of `distribution` (the initial scene); the
+  /// solver renews owners and ghosts itself at each step (migrate, build_ghosts, exchange_ghosts), and every
+  /// query below is a collective over the distribution's ranks with the result for the whole solid. The halo
+  /// must cover solid_interaction_radius(setup).
+  SolidSolver(const SolidSetup& setup, ParticleSet& particles, Distribution& distribution);
   ~SolidSolver();
   SolidSolver(const SolidSolver&) = delete;
   SolidSolver& operator=(const SolidSolver&) = delete;
@@ -87,16 +97,16 @@ class SolidSolver {
   /// existing file (a restarted run) instead of starting it with its header.
   void set_output_directory(const std::string& dir, bool append = false);
 
-  /// Checkpoints: the solid's own state besides the particle arrays (position, velocity, rotation and
-  /// angular velocity are particle arrays): which bonds are broken, the current number densities and the
-  /// irreversible surface flags. The reference configuration (bonds, r0, masses) is rebuilt from the
-  /// initial scene, which a restarted run builds before it loads the state.
+  /// Checkpoints: the solid's state besides the particle arrays (the count of broken bonds). Everything the
+  /// solid knows of a particle is in its particle arrays and fields (rotation, angular velocity, surface flag,
+  /// and the internal fields "_solid_*": reference position, 1/n0, reference bond count, broken bonds), which
+  /// the checkpoint holds by global id; after load_state the solver renews its bonds from them.
   void save_state(BinaryWriter& out) const;
-  /// Throws StateFormatError when the checkpoint's solid has other particles or bonds.
   void load_state(BinaryReader& in);
 
   SolidDiagnostics diagnostics() const;
-  /// Number of fragments (connected components of intact bonds) at the last prepare_output.
+  /// Number of fragments (connected components of intact bonds) at the last prepare_output or
+  /// min_distance_between_fragments (0 before).
   std::size_t n_fragments() const;
   /// Smallest distance between two solid particles of different fragments (fragments recomputed
   /// now), or +inf when none are closer than dp. O(N); for tests.

@@ -8,7 +8,7 @@
 // Usage: mpirun -np R bench_fluid_ppe n_steps dp variant...
 //   variant = label:preconditioner[:key=value[,key=value...]]
 //   keys: rebuild_every, rebuild_growth, tolerance, solver, max_iterations; any other key is passed to
-//   the preconditioner (PressureSolverSettings::parameters, MueLu / Ifpack2 names; ' ' may be written '_').
+//   the preconditioner (PressureSolverSettings::parameters, MueLu / Ifpack2 names; ' ' may be written '_' in keys and values).
 // Example: bench_fluid_ppe 100 0.0016 jac:jacobi sgs:sgs mu5:muelu:rebuild_every=5
 // Results go to docs/performance.md (## Fluid, ### Pressure solve).
 #include "core/distribution.hpp"
@@ -85,7 +85,9 @@ Variant parse_variant(const std::string& text, const CaseSpec& spec) {
         v.settings.solver = *solver;
       } else {
         std::replace(key.begin(), key.end(), '_', ' ');
-        v.settings.parameters[key] = value;
+        std::string text_value = value;
+        std::replace(text_value.begin(), text_value.end(), '_', ' ');
+        v.settings.parameters[key] = text_value;
       }
     }
   return v;

@@ -6,10 +6,11 @@ either receiver within its window, cases/lamb/README.md). Runs mpsfsi, then scri
 with the misfit bound: every misfit (seed 000 eq. 27) below MAX (default 0.01 = 1 %; the full
 lamb_a run gives 0.04 / 0.06 % (ux / uy) at 10 m and 0.08 / 0.11 % at 14 m, the same numbers as this run).
 
-  lamb_reduced.py --mpsfsi BUILD/mpsfsi --work DIR [--max-misfit 0.01]
+  lamb_reduced.py --mpsfsi BUILD/mpsfsi --work DIR [--max-misfit 0.01] [--launcher "mpiexec -n 2"]
 """
 import argparse
 import os
+import shlex
 import subprocess
 import sys
 
@@ -23,9 +24,11 @@ def main():
     ap.add_argument("--mpsfsi", required=True)
     ap.add_argument("--work", required=True)
     ap.add_argument("--max-misfit", type=float, default=0.01)
+    ap.add_argument("--launcher", default="", help="runs mpsfsi on several ranks, e.g. 'mpiexec -n 2'")
+    ap.add_argument("--name", default="lamb_a_reduced", help="the output folder in WORK")
     args = ap.parse_args()
-    out = os.path.join(args.work, "lamb_a_reduced")
-    cmd = [args.mpsfsi, "run", os.path.join(ROOT, "cases", "lamb_a.yaml"), "--quiet", "--overwrite",
+    out = os.path.join(args.work, args.name)
+    cmd = shlex.split(args.launcher) + [args.mpsfsi, "run", os.path.join(ROOT, "cases", "lamb_a.yaml"), "--quiet", "--overwrite",
            "--output", out, "--end-time", "0.0187",
            "--set", "bodies.ground.rectangle={min: [-16, -22], max: [30, 0]}",
            "--set", "receivers.points=[{name: r10, body: ground, position: [10, 0]}, "

@@ -102,6 +102,8 @@ def main():
     ap.add_argument("--probe-tol", type=float, default=1e-6)
     ap.add_argument("--restart", help="checkpoint time of the N-rank run to restart from")
     ap.add_argument("--restart-ranks", default="1")
+    ap.add_argument("--same-file", action="append", default=[],
+                    help="an output file that must be the same byte for byte (e.g. fragments.csv: fracture at the same step)")
     ap.add_argument("run_args", nargs="*")
     a = ap.parse_args()
     if os.path.exists(a.work):
@@ -115,6 +117,11 @@ def main():
     extra = ["--checkpoint-every", a.restart] if a.restart else []
     run(mp + [str(a.ranks)] + base + ["--output", many] + extra)
     compare(one, many, f"{a.ranks} ranks against 1", a)
+    for name in a.same_file:
+        with open(os.path.join(one, name), "rb") as f1, open(os.path.join(many, name), "rb") as fn:
+            if f1.read() != fn.read():
+                fail(f"{name} differs between 1 and {a.ranks} ranks")
+        print(f"{name}: the same on 1 and {a.ranks} ranks")
     if not a.restart:
         return
     times = sorted((float(os.path.basename(c)[len("checkpoint_"):-len(".chk")]), c)
