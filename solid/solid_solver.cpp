@@ -175,10 +175,10 @@ struct SolidSolver::Impl {
   std::vector<std::size_t> b_off;
   std::vector<LocalIndex> b_j;
   std::vector<Vec> b_r0;            ///< x0_j - x0_i
-  std::vector<Real> b_inv_r0, b_wr, b_k, b_w0, b_vi;
-  std::vector<std::uint8_t> b_slot_i, b_slot_j;  ///< bit slots of the offsets i -> j and j -> i
+  std::vector<Real> b_inv_r0, b_wr, b_k, b_vi;
+  std::vector<std::uint8_t> b_slot_i;  ///< bit slot of the offset i -> j
   std::vector<std::uint8_t> b_intact;
-  std::vector<Vec> b_ce;            ///< scratch: V d w0/|r0| e_ij of this step
+  std::vector<Real> b_ce;           ///< scratch: V d w0/|r0| / |r_ij| of this step (times r_ij: eq. 38's direction)
   // Per owned k.
   std::vector<Vec> force;
   std::vector<Angular> torque;
@@ -542,10 +542,8 @@ void SolidSolver::Impl::renew_structure() {
   b_inv_r0.clear();
   b_wr.clear();
   b_k.clear();
-  b_w0.clear();
   b_vi.clear();
   b_slot_i.clear();
-  b_slot_j.clear();
   std::vector<std::pair<GlobalId, LocalIndex>> partners;
   std::string error;
   // own[k] is local[k] (owned particles come first in both lists).
@@ -565,7 +563,8 @@ void SolidSolver::Impl::renew_structure() {
     for (const auto& [gj, jl] : partners) {
       const auto j = static_cast<std::size_t>(jl);
       const Vec r0 = (*f_x0)[j] - (*f_x0)[i];
-      const int slot_i = slot_of((*f_x0)[j] - (*f_x0)[i]), slot_j = slot_of((*f_x0)[i] - (*f_x0)[j]);
+      const int slot_i = slot_of((*f_x0)[j] - (*f_x0)[i]);
+      [[maybe_unused]] const int slot_j = slot_of((*f_x0)[i] - (*f_x0)[j]);
       assert(slot_i >= 0 && slot_j >= 0 && "bonds join lattice neighbours (checked at setup)");
       if (broken & (std::uint64_t{1} << slot_i)) continue;
       assert(!(broken_bits(j) & (std::uint64_t{1} << slot_j)) && "a bond is broken on both sides or on neither");
@@ -575,9 +574,7 @@ void SolidSolver::Impl::renew_structure() {
       b_r0.push_back(r0);
       b_inv_r0.push_back(1 / len);
       b_wr.push_back(w0 / len);
-      b_w0.push_back(w0);
       b_slot_i.push_back(static_cast<std::uint8_t>(slot_i));
-      b_slot_j.push_back(static_cast<std::uint8_t>(slot_j));
       // Force on i: V 2d/n0 2 mu u/|r0| w0/|r0| with 1/n0 -> (1/n0_i + 1/n0_j)/2 (eq. 36-37).
       b_k.push_back(volume * 2 * dim * mi.mu * (w0 / len) / len * (inv_n0_i + (*f_inv_n0)[j]));
       // Volumetric strain weight of i (eq. 30): d/n0_i w0/|r0|, or with corrected weights w0/|r0| e0^T B_i e0.
@@ -604,7 +601,7 @@ void SolidSolver::Impl::renew_structure() {
   // loop stops every rank on an exception within a step.
   if (!error.empty()) throw std::runtime_error(error);
   b_intact.assign(b_j.size(), 1);
-  b_ce.assign(b_j.size(), Vec::Zero());
+  b_ce.assign(b_j.size(), 0);
   force.assign(ns, Vec::Zero());
   torque.assign(ns, Angular{});
   tr.assign(ns, 0);
@@ -745,7 +742,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
       if (damping_time > 0) fe += (b_k[b] * damping_time * (p.velocity[j] - p.velocity[i]).dot(r) * inv_r * inv_r) * r;
       fi += fe;
       ti += 0.5 * cross(r, fe);  // -1/2 M_ij, M_ij = -r_ij x F_ij (eq. 42-43), the same for both ends
-      b_ce[b] = (vd * b_wr[b] * inv_r) * r;
+      b_ce[b] = vd * b_wr[b] * inv_r;
     }
     force[k] = fi;
     torque[k] = ti;
@@ -753,7 +750,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     if (broke) {  // eq. 48 over the intact bonds, irreversible
       Real n_now = 0;
       for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b)
-        if (b_intact[b]) n_now += b_w0[b];
+        if (b_intact[b]) n_now += b_wr[b] / b_inv_r0[b];  // w0
       new_surface[k] = n_now < n_max - n_c;
     }
   }
@@ -772,9 +769,11 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   for (std::size_t k = 0; k < ns; ++k) {
     const auto i = static_cast<std::size_t>(own[k]);
     Vec fi = Vec::Zero();
+    const Vec xi = p.position[i];
     for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
       if (!b_intact[b]) continue;
-      fi -= (pn[i] + pn[static_cast<std::size_t>(b_j[b])]) * b_ce[b];
+      const auto j = static_cast<std::size_t>(b_j[b]);
+      fi -= (pn[i] + pn[j]) * (b_ce[b] * Vec(p.position[j] - xi));
     }
     force[k] += fi;
   }
@@ -1114,7 +1113,7 @@ std::size_t SolidSolver::memory_bytes() const {
   const std::size_t nb = m.b_j.size();
   const std::size_t per_particle = 2 * sizeof(LocalIndex) + sizeof(Vec) + sizeof(Angular) + sizeof(Real) + 1 +
                                    2 * sizeof(Real) + sizeof(GlobalId) + sizeof(Vec) + sizeof(LocalIndex);
-  const std::size_t per_bond = sizeof(LocalIndex) + 2 * sizeof(Vec) + 6 * sizeof(Real) + 4;
+  const std::size_t per_bond = sizeof(LocalIndex) + sizeof(Vec) + 5 * sizeof(Real) + 2;
   return ns * per_particle + nb * per_bond + (ns + 1) * sizeof(std::size_t) + m.s_nl.memory_bytes();
 }
 
