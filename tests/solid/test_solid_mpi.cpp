@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace mpsfsi {
@@ -34,6 +35,16 @@ int my_rank() {
   return r;
 }
 
+/// The distribution of the solid of `spec` over the ranks, with `p` (the whole scene) cut down to this rank's part.
+std::unique_ptr<Distribution> distribute(const CaseSpec& spec, ParticleSet& p) {
+  DistributionSettings ds;
+  ds.skin = 2 * spec.dp;
+  ds.halo_width = solid_interaction_radius(solid_setup(spec)) + ds.skin;
+  auto dist = std::make_unique<Distribution>(MPI_COMM_WORLD, ds);
+  dist->distribute_replicated(p);
+  return dist;
+}
+
 // Two halves of a bar (20 x 5 particles) pulled apart at x = 0.1 m; on 2 ranks the bisection cuts the bar
 // there, so the bonds that break join particles of different ranks.
 TEST(SolidMpi, BondAcrossARankBoundaryBreaksOnBothSidesInTheSameStep) {
@@ -53,12 +64,8 @@ TEST(SolidMpi, BondAcrossARankBoundaryBreaksOnBothSidesInTheSameStep) {
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   pull(p);
-  DistributionSettings ds;
-  ds.skin = 2 * spec.dp;
-  ds.halo_width = solid_interaction_radius(solid_setup(spec)) + ds.skin;
-  Distribution dist(MPI_COMM_WORLD, ds);
-  dist.distribute_replicated(p);
-  SolidSolver solid(solid_setup(spec), p, dist);
+  const auto dist = distribute(spec, p);
+  SolidSolver solid(solid_setup(spec), p, *dist);
   ASSERT_EQ(solid.n_bonds(), reference.n_bonds());
 
   const Real dt = solid.stable_dt();
@@ -147,12 +154,8 @@ TEST(SolidMpi, MigratingBodyKeepsTheStateOfOneProcess) {
   SolidSolver reference(solid_setup(spec), whole.particles);
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
-  DistributionSettings ds;
-  ds.skin = 2 * spec.dp;
-  ds.halo_width = solid_interaction_radius(solid_setup(spec)) + ds.skin;
-  Distribution dist(MPI_COMM_WORLD, ds);
-  dist.distribute_replicated(p);
-  SolidSolver solid(solid_setup(spec), p, dist);
+  const auto dist = distribute(spec, p);
+  SolidSolver solid(solid_setup(spec), p, *dist);
   const Real dt = solid.stable_dt();
   for (int k = 0; k < 1500; ++k) {
     solid.advance(k * dt, dt);
@@ -163,13 +166,13 @@ TEST(SolidMpi, MigratingBodyKeepsTheStateOfOneProcess) {
     const auto r = static_cast<std::size_t>(whole.particles.local_index(p.global_id[i]));
     dx = std::max(dx, (p.position[i] - whole.particles.position[r]).norm());
   }
-  unsigned long long n_owned = p.n_owned(), migrated = dist.stats().n_migrated_out;
+  unsigned long long n_owned = p.n_owned(), migrated = dist->stats().n_migrated_out;
   MPI_Allreduce(MPI_IN_PLACE, &dx, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   MPI_Allreduce(MPI_IN_PLACE, &n_owned, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
   MPI_Allreduce(MPI_IN_PLACE, &migrated, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
   EXPECT_EQ(n_owned, whole.particles.size());
   EXPECT_LT(dx, 1e-12);
-  if (n_ranks() > 1) EXPECT_GT(dist.stats().n_ghost_builds, 1) << "no renewal of owners and ghosts happened";
+  if (n_ranks() > 1) EXPECT_GT(dist->stats().n_ghost_builds, 1) << "no renewal of owners and ghosts happened";
   const SolidDiagnostics d = solid.diagnostics(), d_ref = reference.diagnostics();
   EXPECT_LT((d.momentum - d_ref.momentum).norm(), 1e-12 * d_ref.momentum.norm());
   EXPECT_NEAR(d.angular_momentum, d_ref.angular_momentum, 1e-12 * std::abs(d_ref.angular_momentum));
