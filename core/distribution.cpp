@@ -611,13 +611,15 @@ std::size_t swap_buffers(MPI_Comm comm, const int tag, const std::vector<std::ve
 }
 }  // namespace
 
-void Distribution::exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields) {
-  transfer(p, fields, false);
+void Distribution::exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields,
+                                   const std::optional<ParticleKind> only) {
+  transfer(p, fields, false, only);
 }
 
 void Distribution::reverse_sum(ParticleSet& p, const std::vector<std::string>& fields) { transfer(p, fields, true); }
 
-void Distribution::transfer(ParticleSet& p, const std::vector<std::string>& fields, const bool to_owners) {
+void Distribution::transfer(ParticleSet& p, const std::vector<std::string>& fields, const bool to_owners,
+                            const std::optional<ParticleKind> only) {
   const auto t0 = Clock::now();
   int width = 0;
   const auto arrays = resolve(p, fields, width);
@@ -627,15 +629,24 @@ void Distribution::transfer(ParticleSet& p, const std::vector<std::string>& fiel
          "exchange_ghosts and reverse_sum need the set of the last build_ghosts()");
   const auto P = static_cast<std::size_t>(n_ranks_);
   const std::size_t first_ghost = p.n_owned();
-  // The particles shared with rank q: my owned ones it holds as ghosts, or my ghosts of its particles.
-  const auto count = [&](const std::size_t q, const bool ghosts) {
-    return ghosts ? m.recv_count[q] : m.send_index[q].size();
-  };
+  // The particles shared with rank q: my owned ones it holds as ghosts, or my ghosts of its particles (with
+  // `only`, those of that kind: a ghost has its owner's kind, so both sides pick the same particles in the same
+  // order).
+  const auto taken = [&](const std::size_t i) { return !only || p.kind[i] == *only; };
   const auto each = [&](const std::size_t q, const bool ghosts, auto&& f) {
-    if (ghosts)
-      for (std::size_t k = 0; k < m.recv_count[q]; ++k) f(first_ghost + m.recv_offset[q] + k);
-    else
-      for (const LocalIndex i : m.send_index[q]) f(static_cast<std::size_t>(i));
+    if (ghosts) {
+      for (std::size_t k = 0; k < m.recv_count[q]; ++k)
+        if (taken(first_ghost + m.recv_offset[q] + k)) f(first_ghost + m.recv_offset[q] + k);
+    } else {
+      for (const LocalIndex i : m.send_index[q])
+        if (taken(static_cast<std::size_t>(i))) f(static_cast<std::size_t>(i));
+    }
+  };
+  const auto count = [&](const std::size_t q, const bool ghosts) {
+    if (!only) return ghosts ? m.recv_count[q] : m.send_index[q].size();
+    std::size_t n = 0;
+    each(q, ghosts, [&](std::size_t) { ++n; });
+    return n;
   };
   // Owners to ghosts (values replaced), or ghosts back to their owners (values added, ghosts zeroed).
   const bool send_ghosts = to_owners;

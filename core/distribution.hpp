@@ -16,6 +16,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -102,8 +103,10 @@ class Distribution {
   /// requested. Collective: every rank gets the same answer.
   bool needs_rebuild(const ParticleSet& p, bool requested = false) const;
   /// Refreshes the named fields ("position", "velocity" or registered scalar / vector fields) of the
-  /// ghosts from their owners, with the plan of the last build_ghosts(). Collective.
-  void exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields);
+  /// ghosts from their owners, with the plan of the last build_ghosts(); with `only`, of the ghosts of that
+  /// kind alone (e.g. the solid's sub-steps, which move only solid particles). Collective.
+  void exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields,
+                       std::optional<ParticleKind> only = std::nullopt);
   /// Adds the ghosts' values of the named fields into their owners' values and sets the ghosts' values to
   /// zero (contributions computed at ghosts, e.g. a force on another rank's particle). Collective.
   void reverse_sum(ParticleSet& p, const std::vector<std::string>& fields);
@@ -130,7 +133,8 @@ class Distribution {
 
  private:
   /// exchange_ghosts (to_owners false) and reverse_sum (true) over the plan of the last build_ghosts().
-  void transfer(ParticleSet& p, const std::vector<std::string>& fields, bool to_owners);
+  void transfer(ParticleSet& p, const std::vector<std::string>& fields, bool to_owners,
+                std::optional<ParticleKind> only = std::nullopt);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

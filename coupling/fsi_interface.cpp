@@ -66,7 +66,7 @@ void FsiInterface::sync() {
     dist_->migrate(p_);
     dist_->build_ghosts(p_);
   } else {
-    dist_->exchange_ghosts(p_, {"position", "velocity"});
+    dist_->exchange_ghosts(p_, {"position", "velocity"}, ParticleKind::solid);  // only the solid moved
   }
 }
 
@@ -160,7 +160,7 @@ void FsiInterface::prepare_fluid_boundary(const Real dt) {
     if (i >= p_.n_owned()) continue;
     offset[i] = n0_solid[i] - number_density_at(solid_x_, solid_nl_, re_, k).n;
   }
-  if (dist_ && dist_->n_ranks() > 1) dist_->exchange_ghosts(p_, {opt_.offset_field});
+  if (dist_ && dist_->n_ranks() > 1) dist_->exchange_ghosts(p_, {opt_.offset_field}, ParticleKind::solid);
 }
 
 void FsiInterface::restore_solid() {

@@ -131,7 +131,7 @@ class FsiInterface {
   void load_state(BinaryReader& in);
 
  private:
-  /// Owners and ghosts current (migration when due, else the ghosts' positions and velocities refreshed).
+  /// Owners and ghosts current (migration when due, else the solid ghosts' positions and velocities refreshed).
   void sync();
   /// Sums the per-body force and wetted count (after compute_load) or work (after advance_solid) over the ranks.
   void reduce_bodies(bool force);

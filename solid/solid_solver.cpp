@@ -224,8 +224,9 @@ struct SolidSolver::Impl {
   void allreduce(T* values, int n, MPI_Datatype type, MPI_Op op) const {
     if (comm != MPI_COMM_NULL) MPI_Allreduce(MPI_IN_PLACE, values, n, type, op, comm);
   }
+  /// Refreshes the solid ghosts' fields (the only ghosts the solid reads).
   void exchange(const std::vector<std::string>& fields) {
-    if (dist && dist->n_ranks() > 1) dist->exchange_ghosts(p, fields);
+    if (dist && dist->n_ranks() > 1) dist->exchange_ghosts(p, fields, ParticleKind::solid);
   }
   /// Owners and ghosts current for a solid step (migration and new ghosts when due, else the ghosts' state
   /// refreshed), then the local structure renewed if the set changed.
@@ -515,7 +516,7 @@ void SolidSolver::Impl::sync() {
       dist->migrate(p);
       dist->build_ghosts(p);
     } else {
-      dist->exchange_ghosts(p, {"position", "velocity", "rotation", solid_fields::surface});
+      dist->exchange_ghosts(p, {"position", "velocity", "rotation", solid_fields::surface}, ParticleKind::solid);
     }
   }
   if (set_changed()) renew_structure();

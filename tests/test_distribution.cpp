@@ -1,7 +1,8 @@
 // Tests of the distribution of particles over MPI ranks (core/distribution.hpp), run on 1, 2, 3 and 4 ranks:
 // ownership after distribute_replicated / migrate / partition (every particle on exactly one rank, with all its
 // arrays), regions that tile space, ghosts that give the same number density as one rank holding everything,
-// exchange_ghosts and reverse_sum against independently computed values, and the imbalance measure.
+// exchange_ghosts (also of one kind of particle) and reverse_sum against independently computed values, and the
+// imbalance measure.
 #include "core/distribution.hpp"
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
@@ -308,6 +309,25 @@ TEST_P(DistributionMethod, ExchangeGhostsAndReverseSum) {
     EXPECT_GT(d.stats().halo_bytes, bytes_before);
   }
   EXPECT_THROW(d.exchange_ghosts(p, {"pressure", "no_such_field"}), std::out_of_range);
+
+  // Only the wall ghosts: the fluid ghosts keep their values.
+  for (std::size_t i = 0; i < p.n_owned(); ++i) pressure[i] = -2.0 * static_cast<Real>(p.global_id[i]);
+  d.exchange_ghosts(p, {"pressure"}, ParticleKind::wall);
+  bad = 0;
+  std::size_t n_wall_ghosts = 0;
+  for (std::size_t i = p.n_owned(); i < p.size(); ++i) {
+    const auto g = static_cast<Real>(p.global_id[i]);
+    const bool wall = p.kind[i] == ParticleKind::wall;
+    n_wall_ghosts += wall;
+    bad += pressure[i] != (wall ? -2.0 * g : 3.0 * g + 0.125);
+  }
+  EXPECT_EQ(bad, 0u);
+  if (world_size() > 1) {
+    unsigned long long local[2] = {n_wall_ghosts, p.n_ghost() - n_wall_ghosts};
+    MPI_Allreduce(MPI_IN_PLACE, local, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, world);
+    EXPECT_GT(local[0], 0u);  // both kinds among the ghosts: the test is not vacuous
+    EXPECT_GT(local[1], 0u);
+  }
 
   // reverse_sum: 1 at every particle held (owned and ghost); owners end with 1 + the number of ranks holding
   // them as ghosts, counted from all ranks' ghost ids.

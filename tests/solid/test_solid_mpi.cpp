@@ -172,7 +172,9 @@ TEST(SolidMpi, MigratingBodyKeepsTheStateOfOneProcess) {
   MPI_Allreduce(MPI_IN_PLACE, &migrated, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
   EXPECT_EQ(n_owned, whole.particles.size());
   EXPECT_LT(dx, 1e-12);
-  if (n_ranks() > 1) EXPECT_GT(dist->stats().n_ghost_builds, 1) << "no renewal of owners and ghosts happened";
+  if (n_ranks() > 1) {
+    EXPECT_GT(dist->stats().n_ghost_builds, 1) << "no renewal of owners and ghosts happened";
+  }
   const SolidDiagnostics d = solid.diagnostics(), d_ref = reference.diagnostics();
   EXPECT_LT((d.momentum - d_ref.momentum).norm(), 1e-12 * d_ref.momentum.norm());
   EXPECT_NEAR(d.angular_momentum, d_ref.angular_momentum, 1e-12 * std::abs(d_ref.angular_momentum));
