@@ -611,6 +611,19 @@ std::size_t swap_buffers(MPI_Comm comm, const int tag, const std::vector<std::ve
 }
 }  // namespace
 
+bool Distribution::renew(ParticleSet& p, const std::vector<std::string>& fields, const std::optional<ParticleKind> only,
+                         const bool requested, const std::function<void()>& before_ghosts) {
+  if (!needs_rebuild(p, requested)) {
+    exchange_ghosts(p, fields, only);
+    return false;
+  }
+  p.drop_ghosts();
+  migrate(p);
+  if (before_ghosts) before_ghosts();
+  build_ghosts(p);
+  return true;
+}
+
 void Distribution::exchange_ghosts(ParticleSet& p, const std::vector<std::string>& fields,
                                    const std::optional<ParticleKind> only) {
   transfer(p, fields, false, only);

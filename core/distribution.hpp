@@ -15,6 +15,7 @@
 #include <mpi.h>
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -102,6 +103,11 @@ class Distribution {
   /// particle moved more than half the skin since the last build_ghosts(). Always false on one rank unless
   /// requested. Collective: every rank gets the same answer.
   bool needs_rebuild(const ParticleSet& p, bool requested = false) const;
+  /// Owners and ghosts ready for a module's next use: when needs_rebuild(p, requested), drops the ghosts,
+  /// migrates, calls `before_ghosts` (e.g. a reorder of the owned particles) and builds the ghosts, and returns
+  /// true; otherwise refreshes `fields` of the ghosts (of kind `only`) and returns false. Collective.
+  bool renew(ParticleSet& p, const std::vector<std::string>& fields, std::optional<ParticleKind> only = std::nullopt,
+             bool requested = false, const std::function<void()>& before_ghosts = {});
   /// Refreshes the named fields ("position", "velocity" or registered scalar / vector fields) of the
   /// ghosts from their owners, with the plan of the last build_ghosts(); with `only`, of the ghosts of that
   /// kind alone (e.g. the solid's sub-steps, which move only solid particles). Collective.

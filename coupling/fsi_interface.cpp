@@ -60,14 +60,7 @@ FluidOptions FsiInterface::fluid_options(const FsiOptions& options, FluidOptions
 }
 
 void FsiInterface::sync() {
-  if (!dist_ || dist_->n_ranks() == 1) return;
-  if (dist_->needs_rebuild(p_)) {
-    p_.drop_ghosts();
-    dist_->migrate(p_);
-    dist_->build_ghosts(p_);
-  } else {
-    dist_->exchange_ghosts(p_, {"position", "velocity"}, ParticleKind::solid);  // only the solid moved
-  }
+  if (dist_) dist_->renew(p_, {"position", "velocity"}, ParticleKind::solid);  // only the solid moved
 }
 
 void FsiInterface::reduce_bodies(const bool force) {

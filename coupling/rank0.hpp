@@ -1,9 +1,10 @@
 // Work that one rank (on_rank0) or every rank (on_every_rank) does, with its outcome shared: an exception
 // is thrown on every rank, with its kind kept (CaseError: bad input, exit 2; OutputError: a file could not
 // be written, exit 4; anything else: exit 1), so that no rank waits in a collective for a rank that
-// stopped. agreed_message() makes one message of the ranks' findings (e.g. the first unstable particle).
+// stopped. agreed_message() (core/collectives.hpp) makes one message of the ranks' findings.
 #pragma once
 
+#include "core/collectives.hpp"
 #include "core/files.hpp"
 #include "io/case.hpp"
 
@@ -60,21 +61,6 @@ void on_rank0(MPI_Comm comm, F&& f) {
   int status = rank == 0 ? detail::run_caught(f, message) : 0;
   if (size > 1) detail::share(comm, 0, status, message);
   if (status != 0) detail::rethrow(status, message);
-}
-
-/// The lowest rank whose `local` message is not empty hands it to every rank; empty if no rank has one.
-/// A collective.
-inline std::string agreed_message(MPI_Comm comm, std::string local) {
-  int rank = 0, size = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  if (size == 1) return local;
-  int first = local.empty() ? size : rank;
-  MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
-  if (first == size) return {};
-  int status = 0;
-  detail::share(comm, first, status, local);
-  return local;
 }
 
 /// Runs `f` on every rank of `comm`; if it threw on some rank, the lowest such rank's exception is thrown

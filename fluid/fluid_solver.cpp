@@ -501,14 +501,9 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   // skin since they were built; in between, the ghosts' positions and velocities are refreshed.
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
   const bool reorder = m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0;
-  if (m.dist.needs_rebuild(m.p, reorder)) {
-    m.p.drop_ghosts();
-    m.dist.migrate(m.p);
+  m.dist.renew(m.p, {"position", "velocity"}, std::nullopt, reorder, [&] {
     if (reorder) m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
-    m.dist.build_ghosts(m.p);
-  } else {
-    m.dist.exchange_ghosts(m.p, {"position", "velocity"});
-  }
+  });
   report.t_halo += seconds_since(t0);
   t0 = Clock::now();
   m.classify();

@@ -35,6 +35,7 @@
 #include "solid/solid_solver.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/collectives.hpp"
 #include "core/distribution.hpp"
 #include "core/files.hpp"
 #include "core/kernel.hpp"
@@ -72,22 +73,6 @@ constexpr const char* pn = "_solid_pn";            ///< p_i / n0_i of this step 
 constexpr const char* label = "_solid_label";      ///< fragment label (smallest global id of the fragment)
 constexpr const char* coef[3] = {"_solid_bxx", "_solid_byy", "_solid_bxy"};  ///< corrected strain weights (B_i)
 }  // namespace internal
-
-/// The lowest rank's non-empty message on every rank (empty if none); `comm` may be MPI_COMM_NULL (one process).
-std::string agreed(MPI_Comm comm, std::string local) {
-  if (comm == MPI_COMM_NULL) return local;
-  int rank = 0, size = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  int first = local.empty() ? size : rank;
-  MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
-  if (first == size) return {};
-  std::uint64_t n = local.size();
-  MPI_Bcast(&n, 1, MPI_UINT64_T, first, comm);
-  local.resize(n);
-  MPI_Bcast(local.data(), static_cast<int>(n), MPI_CHAR, first, comm);
-  return local;
-}
 
 }  // namespace
 
@@ -168,8 +153,10 @@ struct SolidSolver::Impl {
   // Local structure, renewed when the particle set changed (migration, ghosts, reorder, restart).
   std::vector<GlobalId> seen_gid;  ///< global ids of the set at the last renewal (owned, then ghosts)
   std::size_t seen_owned = 0;
-  std::vector<LocalIndex> own;     ///< owned solid particles k -> local index
-  std::vector<LocalIndex> local;   ///< owned and ghost solid particles (contact candidates, half angles)
+  /// Solid particles held here, in order of local index: the owned ones first (k < n(): solid index k of the
+  /// bonds and per-owned arrays), then the ghosts (contact candidates, half angles).
+  std::vector<LocalIndex> local;
+  std::size_t n_own = 0;
   // Bonds of each owned solid particle k (both directions: every rank computes its own particles' forces),
   // CSR over k, sorted by the partner's global id.
   std::vector<std::size_t> b_off;
@@ -201,7 +188,7 @@ struct SolidSolver::Impl {
   bool csv_started = false;
 
   Impl(const SolidSetup& setup, ParticleSet& particles, Distribution* distribution);
-  std::size_t n() const { return own.size(); }
+  std::size_t n() const { return n_own; }
   int n_ranks() const { return dist ? dist->n_ranks() : 1; }
   bool is_solid(const std::size_t i) const { return p.kind[i] == ParticleKind::solid; }
   std::uint64_t broken_bits(const std::size_t i) const { return static_cast<std::uint64_t>((*f_broken)[i]); }
@@ -225,6 +212,8 @@ struct SolidSolver::Impl {
     if (comm != MPI_COMM_NULL) MPI_Allreduce(MPI_IN_PLACE, values, n, type, op, comm);
   }
   /// Refreshes the solid ghosts' fields (the only ghosts the solid reads).
+  /// The lowest rank's non-empty message on every rank (this process's alone without a distribution).
+  std::string agreed(const std::string& local) const { return comm != MPI_COMM_NULL ? agreed_message(comm, local) : local; }
   void exchange(const std::vector<std::string>& fields) {
     if (dist && dist->n_ranks() > 1) dist->exchange_ghosts(p, fields, ParticleKind::solid);
   }
@@ -250,7 +239,7 @@ struct SolidSolver::Impl {
   template <class F>
   void for_each_intact_bond(F&& f) const {
     for (std::size_t k = 0; k < n(); ++k) {
-      const auto i = static_cast<std::size_t>(own[k]);
+      const auto i = static_cast<std::size_t>(local[k]);
       for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
         if (!b_intact[b]) continue;
         Vec r, u;
@@ -351,7 +340,7 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
     used[static_cast<std::size_t>(m)] = 1;
     (*f_x0)[i] = p.position[i];
   }
-  error = agreed(comm, error);
+  error = agreed(error);
   if (!error.empty()) throw SetupError(error);
   allreduce(used.data(), static_cast<int>(used.size()), MPI_UINT8_T, MPI_MAX);
   for (std::size_t m = 0; m < mat.size(); ++m) {
@@ -419,7 +408,7 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
       for (int c = 0; c < 3; ++c) (*f_coef[c])[i] = coef[c];
     }
   }
-  error = agreed(comm, error);
+  error = agreed(error);
   if (!error.empty()) throw SetupError(error);
   allreduce(&n_max_local, 1, MPI_DOUBLE, MPI_MAX);
   n_max = std::max(n_max_local, n0_lattice);
@@ -466,15 +455,7 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
     if (n_body == 0)
       throw SetupError(fmt::format("{}: source '{}': body '{}' is not a solid body with particles", setup.origin, ss.name,
                                    ss.body));
-    std::vector<double> gathered = mine;
-    if (comm != MPI_COMM_NULL && n_ranks() > 1) {
-      const int n_mine = static_cast<int>(mine.size());
-      std::vector<int> counts(static_cast<std::size_t>(n_ranks())), displs(counts.size(), 0);
-      MPI_Allgather(&n_mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
-      for (std::size_t r = 1; r < counts.size(); ++r) displs[r] = displs[r - 1] + counts[r - 1];
-      gathered.resize(static_cast<std::size_t>(displs.back() + counts.back()));
-      MPI_Allgatherv(mine.data(), n_mine, MPI_DOUBLE, gathered.data(), counts.data(), displs.data(), MPI_DOUBLE, comm);
-    }
+    const std::vector<double> gathered = comm != MPI_COMM_NULL ? all_gather(comm, mine) : mine;
     std::vector<std::pair<GlobalId, Vec>> cand;
     for (std::size_t q = 0; q < gathered.size(); q += 1 + dim) {
       Vec x;
@@ -510,27 +491,19 @@ bool SolidSolver::Impl::set_changed() const {
 }
 
 void SolidSolver::Impl::sync() {
-  if (dist && dist->n_ranks() > 1) {
-    if (dist->needs_rebuild(p)) {
-      p.drop_ghosts();
-      dist->migrate(p);
-      dist->build_ghosts(p);
-    } else {
-      dist->exchange_ghosts(p, {"position", "velocity", "rotation", solid_fields::surface}, ParticleKind::solid);
-    }
-  }
+  if (dist) dist->renew(p, {"position", "velocity", "rotation", solid_fields::surface}, ParticleKind::solid);
   if (set_changed()) renew_structure();
 }
 
 void SolidSolver::Impl::renew_structure() {
   seen_gid = p.global_id;
   seen_owned = p.n_owned();
-  own.clear();
+  n_own = 0;
   local.clear();
   std::vector<Vec> x0;
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!is_solid(i)) continue;
-    if (i < p.n_owned()) own.push_back(static_cast<LocalIndex>(i));
+    n_own += i < p.n_owned();
     local.push_back(static_cast<LocalIndex>(i));
     x0.push_back((*f_x0)[i]);
   }
@@ -547,9 +520,9 @@ void SolidSolver::Impl::renew_structure() {
   b_slot_i.clear();
   std::vector<std::pair<GlobalId, LocalIndex>> partners;
   std::string error;
-  // own[k] is local[k] (owned particles come first in both lists).
+  // Row k of the list is owned particle k (the owned ones come first in `local`).
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(own[k]);
+    const auto i = static_cast<std::size_t>(local[k]);
     b_off[k] = b_j.size();
     partners.clear();
     for (std::size_t q = nl.begin(k); q < nl.end(k); ++q) {
@@ -613,7 +586,7 @@ void SolidSolver::Impl::renew_structure() {
   for (auto& load : loads) {
     load.members.clear();
     for (std::size_t k = 0; k < ns; ++k) {
-      const auto i = static_cast<std::size_t>(own[k]);
+      const auto i = static_cast<std::size_t>(local[k]);
       if (p.bodies[p.body[i]].name == load.spec.body && load.spec.region.contains((*f_x0)[i])) load.members.push_back(k);
     }
   }
@@ -622,7 +595,7 @@ void SolidSolver::Impl::renew_structure() {
     for (std::size_t q = 0; q < src.id.size(); ++q) {
       const LocalIndex i = p.local_index(src.id[q]);
       if (i >= 0 && static_cast<std::size_t>(i) < p.n_owned())
-        src.members.emplace_back(static_cast<std::size_t>(std::lower_bound(own.begin(), own.end(), i) - own.begin()), q);
+        src.members.emplace_back(static_cast<std::size_t>(std::lower_bound(local.begin(), local.begin() + static_cast<std::ptrdiff_t>(n_own), i) - local.begin()), q);
     }
   }
 }
@@ -669,12 +642,12 @@ void SolidSolver::Impl::contact_forces(std::size_t& n_contacts) {
   if (s_x.size() < 2) return;
   build_neighbour_list(s_x, dp, s_nl, s_grid);
   const Real d_min = 0.05 * dp;
-  // own[k] is local[k]: the owned surface particles come first in s_i, in order of k.
+  // The owned surface particles come first in s_i, in order of k.
   std::size_t k = 0;
   for (std::size_t q = 0; q < s_x.size(); ++q) {
     const auto i = static_cast<std::size_t>(s_i[q]);
     if (i >= p.n_owned()) break;
-    while (static_cast<std::size_t>(own[k]) != i) ++k;
+    while (static_cast<std::size_t>(local[k]) != i) ++k;
     s_pairs.clear();
     for (std::size_t e = s_nl.begin(q); e < s_nl.end(q); ++e) {
       const LocalIndex j = s_i[static_cast<std::size_t>(s_nl.index[e])];
@@ -716,7 +689,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   // a bond breaks on both sides in the same step and the two forces are exactly opposite.
   const Real vd = volume * dim;
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(own[k]);
+    const auto i = static_cast<std::size_t>(local[k]);
     const Real eps_max = material_of(i).eps_max;
     Vec fi = Vec::Zero();
     Angular ti{};
@@ -758,7 +731,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   // Pressure p_i = -lambda tr(eps)_i (eq. 30, 33); pn holds p_i / n0_i, which the ghosts need.
   auto& pn = *f_pn;
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(own[k]);
+    const auto i = static_cast<std::size_t>(local[k]);
     pn[i] = -material_of(i).lambda * tr[k] * (*f_inv_n0)[i];
   }
   exchange({internal::pn});
@@ -768,7 +741,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   // when sigma_yy = 0 (a uniform traction-free strain is an equilibrium, docs/validation.md), at the price of
   // a pressure force that is no longer exactly an energy gradient near surfaces.
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(own[k]);
+    const auto i = static_cast<std::size_t>(local[k]);
     Vec fi = Vec::Zero();
     const Vec xi = p.position[i];
     for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
@@ -784,12 +757,12 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   contact_forces(n_contacts);
   counts[1] = n_contacts;
   for (std::size_t k = 0; k < ns; ++k)
-    if (new_surface[k]) (*f_surface)[static_cast<std::size_t>(own[k])] = 1;
+    if (new_surface[k]) (*f_surface)[static_cast<std::size_t>(local[k])] = 1;
 
   // External loads: gravity, the coupling's per-particle force, pressure pulses, seismic sources.
   const bool has_gravity = gravity.squaredNorm() > 0;
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(own[k]);
+    const auto i = static_cast<std::size_t>(local[k]);
     if (has_gravity) force[k] += material_of(i).mass * gravity;
     force[k] += (*f_load)[i];
   }
@@ -809,7 +782,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   Real v2_max = 0;
   const auto [tank_theta, tank_omega] = tank.at(t + dt);
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(own[k]);
+    const auto i = static_cast<std::size_t>(local[k]);
     if (p.clamped[i]) {
       p.position[i] = tank.place((*f_x0)[i], tank_theta);
       p.velocity[i] = tank.velocity_at(p.position[i], tank_omega);
@@ -850,7 +823,7 @@ void SolidSolver::Impl::compute_fragments() {
   for (std::size_t k = 0; k < n(); ++k)
     for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
       if (!b_intact[b]) continue;
-      const std::size_t ra = find(static_cast<std::size_t>(own[k])), rb = find(static_cast<std::size_t>(b_j[b]));
+      const std::size_t ra = find(static_cast<std::size_t>(local[k])), rb = find(static_cast<std::size_t>(b_j[b]));
       if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
     }
   auto& label = *f_label;
@@ -862,7 +835,7 @@ void SolidSolver::Impl::compute_fragments() {
   }
   for (int round = 0;; ++round) {
     for (std::size_t k = 0; k < n(); ++k) {
-      const auto i = static_cast<std::size_t>(own[k]);
+      const auto i = static_cast<std::size_t>(local[k]);
       label[i] = static_cast<Real>(root_label[find(i)]);
     }
     if (n_ranks() == 1) break;
@@ -885,7 +858,7 @@ void SolidSolver::Impl::compute_fragments() {
   // Each fragment has one particle whose global id is its label.
   unsigned long long n_roots = 0;
   for (std::size_t k = 0; k < n(); ++k) {
-    const auto i = static_cast<std::size_t>(own[k]);
+    const auto i = static_cast<std::size_t>(local[k]);
     n_roots += static_cast<GlobalId>(label[i]) == p.global_id[i];
   }
   allreduce(&n_roots, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
@@ -952,7 +925,7 @@ void SolidSolver::prepare_output(const Real t) {
   };
   std::map<GlobalId, Sums> local_sums;
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(m.own[k]);
+    const auto i = static_cast<std::size_t>(m.local[k]);
     auto& s = local_sums[static_cast<GlobalId>((*m.f_label)[i])];
     const Real mass = m.material_of(i).mass;
     s.count += 1;
@@ -969,15 +942,7 @@ void SolidSolver::prepare_output(const Real t) {
     for (int a = 0; a < dim; ++a) mine.push_back(s.mx[a]);
     mine.push_back(s.body);
   }
-  std::vector<double> all = mine;
-  if (m.comm != MPI_COMM_NULL && m.n_ranks() > 1) {
-    const int n_mine = static_cast<int>(mine.size());
-    std::vector<int> counts(static_cast<std::size_t>(m.n_ranks())), displs(counts.size(), 0);
-    MPI_Allgather(&n_mine, 1, MPI_INT, counts.data(), 1, MPI_INT, m.comm);
-    for (std::size_t r = 1; r < counts.size(); ++r) displs[r] = displs[r - 1] + counts[r - 1];
-    all.resize(static_cast<std::size_t>(displs.back() + counts.back()));
-    MPI_Allgatherv(mine.data(), n_mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, m.comm);
-  }
+  const std::vector<double> all = m.comm != MPI_COMM_NULL ? all_gather(m.comm, mine) : mine;
   std::map<GlobalId, Sums> sums;
   for (std::size_t q = 0; q < all.size(); q += width) {
     auto& s = sums[static_cast<GlobalId>(all[q])];
@@ -993,7 +958,7 @@ void SolidSolver::prepare_output(const Real t) {
   m.n_frag = order.size();
 
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(m.own[k]);
+    const auto i = static_cast<std::size_t>(m.local[k]);
     const Impl::MaterialConstants& mc = m.material_of(i);
     const Mat g = dim * (*m.f_inv_n0)[i] * grad[k];
     const Mat eps = 0.5 * (g + g.transpose());
@@ -1039,7 +1004,7 @@ SolidDiagnostics SolidSolver::diagnostics() const {
   });
   const auto& surface = *m.f_surface;
   for (std::size_t k = 0; k < ns; ++k) {
-    const auto i = static_cast<std::size_t>(m.own[k]);
+    const auto i = static_cast<std::size_t>(m.local[k]);
     const Impl::MaterialConstants& mc = m.material_of(i);
     const Vec& x = m.p.position[i];
     const Vec& v = m.p.velocity[i];
@@ -1087,8 +1052,8 @@ Real SolidSolver::min_distance_between_fragments() const {
   NeighbourList nl;
   build_neighbour_list(x, m.dp, nl);
   Real best = std::numeric_limits<Real>::infinity();
-  for (std::size_t k = 0; k < m.n(); ++k) {  // own[k] is local[k]
-    const auto i = static_cast<std::size_t>(m.own[k]);
+  for (std::size_t k = 0; k < m.n(); ++k) {  // row k: owned particle k
+    const auto i = static_cast<std::size_t>(m.local[k]);
     for (std::size_t q = nl.begin(k); q < nl.end(k); ++q) {
       const auto j = static_cast<std::size_t>(m.local[static_cast<std::size_t>(nl.index[q])]);
       if (label[i] != label[j]) best = std::min(best, (x[static_cast<std::size_t>(nl.index[q])] - x[k]).norm());
@@ -1103,7 +1068,7 @@ std::size_t SolidSolver::n_bonds() const {
   unsigned long long n = 0;
   for (std::size_t k = 0; k < m.n(); ++k)
     for (std::size_t b = m.b_off[k]; b < m.b_off[k + 1]; ++b)
-      n += m.b_intact[b] && m.p.global_id[static_cast<std::size_t>(m.own[k])] < m.p.global_id[static_cast<std::size_t>(m.b_j[b])];
+      n += m.b_intact[b] && m.p.global_id[static_cast<std::size_t>(m.local[k])] < m.p.global_id[static_cast<std::size_t>(m.b_j[b])];
   m.allreduce(&n, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
   return n;
 }

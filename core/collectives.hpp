@@ -1,0 +1,44 @@
+// Small collectives over an MPI communicator that several modules need: one message agreed by all ranks (the
+// lowest rank's finding) and an all-gather of variable-length arrays of numbers.
+#pragma once
+
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mpsfsi {
+
+/// The lowest rank whose `local` message is not empty hands it to every rank; empty if no rank has one.
+/// A collective.
+inline std::string agreed_message(MPI_Comm comm, std::string local) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  if (size == 1) return local;
+  int first = local.empty() ? size : rank;
+  MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) return {};
+  std::uint64_t n = local.size();
+  MPI_Bcast(&n, 1, MPI_UINT64_T, first, comm);
+  local.resize(n);
+  if (n > 0) MPI_Bcast(local.data(), static_cast<int>(n), MPI_CHAR, first, comm);
+  return local;
+}
+
+/// Every rank's `mine`, concatenated in rank order, on every rank. A collective.
+inline std::vector<double> all_gather(MPI_Comm comm, const std::vector<double>& mine) {
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  if (size == 1) return mine;
+  const int n_mine = static_cast<int>(mine.size());
+  std::vector<int> counts(static_cast<std::size_t>(size)), displs(counts.size(), 0);
+  MPI_Allgather(&n_mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  for (std::size_t r = 1; r < counts.size(); ++r) displs[r] = displs[r - 1] + counts[r - 1];
+  std::vector<double> all(static_cast<std::size_t>(displs.back() + counts.back()));
+  MPI_Allgatherv(mine.data(), n_mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, comm);
+  return all;
+}
+
+}  // namespace mpsfsi
