@@ -160,14 +160,10 @@ TEST(Solid, ClampedParticlesStayPut) {
 // Two halves of a bar pulled apart: the bonds across break (eq. 47), never heal, the new faces become
 // surface particles (eq. 48), the fragments are counted and written to fragments.csv.
 TEST(Solid, BarPulledApartBreaksIntoTwoFragments) {
-  CaseSpec spec = base_case(0.01);
-  SolidMaterial m = material("glass", 1000, 1e6, 0.3);
-  m.fracture_strain = 0.05;
-  spec.solid_materials.push_back(m);
-  spec.bodies.push_back(solid_body("bar", "glass", Vec(0, 0), Vec(0.2, 0.05)));
+  const CaseSpec spec = test::brittle_bar_case();
   Scene scene = build_scene(spec);
   auto& p = scene.particles;
-  for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] = Vec(p.position[i][0] < 0.1 ? -5.0 : 5.0, 0);
+  test::pull_bar_apart(p);
   SolidSolver solid(solid_setup(spec), p);
   const auto dir = std::filesystem::temp_directory_path() / "mpsfsi_test_solid_fracture";
   std::filesystem::create_directories(dir);

@@ -48,14 +48,8 @@ std::unique_ptr<Distribution> distribute(const CaseSpec& spec, ParticleSet& p) {
 // Two halves of a bar (20 x 5 particles) pulled apart at x = 0.1 m; on 2 ranks the bisection cuts the bar
 // there, so the bonds that break join particles of different ranks.
 TEST(SolidMpi, BondAcrossARankBoundaryBreaksOnBothSidesInTheSameStep) {
-  CaseSpec spec = base_case(0.01);
-  SolidMaterial m = material("glass", 1000, 1e6, 0.3);
-  m.fracture_strain = 0.05;
-  spec.solid_materials.push_back(m);
-  spec.bodies.push_back(solid_body("bar", "glass", Vec(0, 0), Vec(0.2, 0.05)));
-  const auto pull = [](ParticleSet& p) {
-    for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] = Vec(p.position[i][0] < 0.1 ? -5.0 : 5.0, 0);
-  };
+  const CaseSpec spec = test::brittle_bar_case();
+  const auto pull = test::pull_bar_apart;
   // The reference: the whole bar in this process.
   Scene whole = build_scene(spec);
   pull(whole.particles);

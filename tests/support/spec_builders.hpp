@@ -1,8 +1,10 @@
 // Small builders of in-memory case specs for the unit tests (no YAML): a bare case, a solid material from
-// E and nu or from the wave speeds, and a rectangular solid body. Header-only; tests include it as
+// E and nu or from the wave speeds, a rectangular solid body, and a brittle bar to pull apart. Header-only;
+// tests include it as
 // "support/spec_builders.hpp".
 #pragma once
 
+#include "core/particles.hpp"
 #include "io/case.hpp"
 
 #include <string>
@@ -47,6 +49,21 @@ inline BodySpec solid_body(const std::string& name, const std::string& mat, cons
   b.material = mat;
   b.rect = {lo, hi};
   return b;
+}
+
+/// A brittle bar of 20 x 5 particles (dp 1 cm, 0.2 x 0.05 m, fracture strain 0.05)...
+inline CaseSpec brittle_bar_case() {
+  CaseSpec spec = base_case(0.01);
+  SolidMaterial m = material("glass", 1000, 1e6, 0.3);
+  m.fracture_strain = 0.05;
+  spec.solid_materials.push_back(m);
+  spec.bodies.push_back(solid_body("bar", "glass", Vec(0, 0), Vec(0.2, 0.05)));
+  return spec;
+}
+
+/// ... and its halves pulled apart at x = 0.1 m (5 m/s each way).
+inline void pull_bar_apart(ParticleSet& p) {
+  for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] = Vec(p.position[i][0] < 0.1 ? -5.0 : 5.0, 0);
 }
 
 }  // namespace mpsfsi::test
