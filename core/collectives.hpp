@@ -1,5 +1,5 @@
 // Small collectives over an MPI communicator that several modules need: one message agreed by all ranks (the
-// lowest rank's finding) and an all-gather of variable-length arrays of numbers.
+// lowest rank's finding) and an all-gather of variable-length arrays of numbers (double or int64).
 #pragma once
 
 #include <mpi.h>
@@ -27,8 +27,17 @@ inline std::string agreed_message(MPI_Comm comm, std::string local) {
   return local;
 }
 
+/// The MPI datatype of T (double, std::int64_t).
+template <class T>
+MPI_Datatype mpi_type();
+template <>
+inline MPI_Datatype mpi_type<double>() { return MPI_DOUBLE; }
+template <>
+inline MPI_Datatype mpi_type<std::int64_t>() { return MPI_INT64_T; }
+
 /// Every rank's `mine`, concatenated in rank order, on every rank. A collective.
-inline std::vector<double> all_gather(MPI_Comm comm, const std::vector<double>& mine) {
+template <class T>
+std::vector<T> all_gather(MPI_Comm comm, const std::vector<T>& mine) {
   int size = 1;
   MPI_Comm_size(comm, &size);
   if (size == 1) return mine;
@@ -36,8 +45,8 @@ inline std::vector<double> all_gather(MPI_Comm comm, const std::vector<double>& 
   std::vector<int> counts(static_cast<std::size_t>(size)), displs(counts.size(), 0);
   MPI_Allgather(&n_mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
   for (std::size_t r = 1; r < counts.size(); ++r) displs[r] = displs[r - 1] + counts[r - 1];
-  std::vector<double> all(static_cast<std::size_t>(displs.back() + counts.back()));
-  MPI_Allgatherv(mine.data(), n_mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, comm);
+  std::vector<T> all(static_cast<std::size_t>(displs.back() + counts.back()));
+  MPI_Allgatherv(mine.data(), n_mine, mpi_type<T>(), all.data(), counts.data(), displs.data(), mpi_type<T>(), comm);
   return all;
 }
 

@@ -99,6 +99,10 @@ struct FluidParameters {
   Real density_tolerance = 1e-6;
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between
+  /// sgs / ssor: side of the coarse groups of the two-level solve, in units of dp (square cells of space;
+  /// 0: one level). At least re_laplacian, so that a row meets at most 3^dim groups. 8 is the fastest
+  /// measured (docs/performance.md, ## Parallel runs).
+  Real coarse_size = 8;
   LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
   /// The largest share of a fluid body's particles that may leave the domain before the run stops (exit 3).
   Real max_loss = 0.05;

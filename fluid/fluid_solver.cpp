@@ -46,6 +46,17 @@ enum class Role : std::uint8_t {
 
 inline bool has_row(const Role r) { return r == Role::fluid || r == Role::boundary; }
 
+/// The cell of side h that holds x, as one key per cell (bits per axis: 62 / dim, cells counted from
+/// -2^(bits-1)).
+std::int64_t cell_key(const Vec& x, const Real h) {
+  constexpr int bits = 62 / dim;
+  constexpr std::int64_t mask = (std::int64_t{1} << bits) - 1;
+  std::int64_t key = 0;
+  for (int a = 0; a < dim; ++a)
+    key = (key << bits) | ((static_cast<std::int64_t>(std::floor(x[a] / h)) + (std::int64_t{1} << (bits - 1))) & mask);
+  return key;
+}
+
 }  // namespace
 
 struct FluidSolver::Impl {
@@ -93,6 +104,11 @@ struct FluidSolver::Impl {
     ps.rebuild_every = fluid.preconditioner_rebuild_every;
     solver = make_pressure_solver(ps, comm);
     tolerance = ps.tolerance;
+    if (fluid.coarse_size != 0 && !(fluid.coarse_size >= fluid.re_laplacian))
+      throw std::invalid_argument("fluid.coarse_size: " + std::to_string(fluid.coarse_size) +
+                                  " (expected 0 or at least re_laplacian = " + std::to_string(fluid.re_laplacian) + ")");
+    const bool two_level = ps.preconditioner == Preconditioner::ssor || ps.preconditioner == Preconditioner::sgs;
+    coarse_cell = two_level ? fluid.coarse_size * dp : 0;
     density_tolerance = fluid.density_tolerance;
     preconditioner = std::string(to_string(ps.preconditioner));
 
@@ -266,6 +282,13 @@ struct FluidSolver::Impl {
         sys.remote_rank.push_back(dist.ghost_owner(j - n_own));
       }
     }
+    sys.group.clear();
+    if (coarse_cell > 0) {  // the coarse groups: cells of side coarse_cell, the same on every rank
+      for (std::size_t r = 0; r < n_rows; ++r)
+        sys.group.push_back(cell_key(p.position[static_cast<std::size_t>(particle_of_row[r])], coarse_cell));
+      for (std::size_t j = n_own; j < n; ++j)
+        if (row_of[j] >= 0) sys.group.push_back(cell_key(p.position[j], coarse_cell));
+    }
     // ||r||_2 <= eta rho / dt^2 sqrt(n_rows): RMS over the rows of r dt^2 / rho below eta.
     unsigned long long n_rows_global = n_rows;
     MPI_Allreduce(MPI_IN_PLACE, &n_rows_global, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
@@ -413,6 +436,7 @@ struct FluidSolver::Impl {
   Real lateral_friction = 0;  ///< k [1/s] of fluid.lateral_walls (0: off)
   Real wall_omega = 0;        ///< the tank's angular velocity at the end of the current step
   Real tolerance = 1e-8;
+  Real coarse_cell = 0;  ///< side of the pressure solve's coarse groups (0: none)
   Real density_tolerance = 0;  ///< fluid.density_tolerance: absolute stop, RMS of r dt^2 / rho
   std::string preconditioner;
   std::unique_ptr<PressureSolver> solver;

@@ -11,6 +11,7 @@
 #include <mpi.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -58,6 +59,10 @@ struct LocalRows {
   std::vector<LocalIndex> col;
   std::vector<Real> value;
   std::vector<Real> rhs;              ///< size row_id.size()
+  /// Coarse groups for the two-level SSOR: the group of each column (this rank's rows, then the remote
+  /// columns), a key that names the same group on every rank (the fluid: a cell of a coarse grid over
+  /// space). Empty: no coarse level.
+  std::vector<std::int64_t> group;
   /// The solve may also stop when ||b - Ax||_2 (over all ranks) is at most this, whatever the relative
   /// tolerance says (0: off). The fluid sets it from fluid.density_tolerance.
   Real absolute_tolerance = 0;

@@ -11,6 +11,10 @@
 #include "fluid/pressure_solver.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/collectives.hpp"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 
 #include <BelosLinearProblem.hpp>
 #include <BelosSolverFactory.hpp>
@@ -26,6 +30,7 @@
 #include <Tpetra_MultiVector.hpp>
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -116,80 +121,229 @@ struct CrsBlock {
   }
 };
 
+/// The coarse level of the two-level SSOR: Z (rows x m) has one column per coarse group of the system
+/// (Z_ik = 1 when row i is in group k; rows without off-diagonal entries are in no group), E = Z^T A Z
+/// (m x m, the same on every rank, factorised with Eigen's sparse LDL^T), and this rank's rows of A Z.
+/// Deflating the CG by span(Z) removes the smooth error components that a single-level relaxation
+/// leaves to many iterations (Tang, Nabben, Vuik & Erlangga 2009), so the iteration count stops growing
+/// with the number of rows and with the number of ranks.
+struct CoarseLevel {
+  int m = 0;                   ///< coarse unknowns over all ranks (0: no coarse level)
+  std::vector<int> of_row;     ///< this rank's row -> coarse index, -1 if in no group
+  CrsBlock az;                 ///< A Z on this rank's rows (columns: coarse indices, sorted)
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<Scalar>> e;
+  MPI_Comm comm = MPI_COMM_NULL;
+  int n_ranks = 1;
+  std::vector<int> of_col;  ///< column -> coarse index, -1 if in no group
+  mutable std::vector<Scalar> g;
+
+  std::size_t bytes() const { return az.bytes() + of_row.capacity() * sizeof(int) + g.capacity() * sizeof(Scalar); }
+
+  /// The coarse index of every column of `sys` (of_col) and row (of_row): the groups of all ranks' rows
+  /// with more than one entry (identity rows, e.g. the free surface's, are in no group), numbered in key
+  /// order. A collective.
+  void set_groups(const LocalRows& sys, MPI_Comm c, const int ranks) {
+    comm = c;
+    n_ranks = ranks;
+    const std::size_t n = sys.n_rows(), n_cols = n + sys.remote_id.size();
+    const auto coupled = [&](const std::size_t i) { return sys.row_ptr[i + 1] - sys.row_ptr[i] > 1; };
+    // Rows come in runs of one group: repeats are skipped before sorting.
+    std::vector<std::int64_t> keys;
+    for (std::size_t i = 0; i < n; ++i)
+      if (coupled(i) && (keys.empty() || keys.back() != sys.group[i])) keys.push_back(sys.group[i]);
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    if (n_ranks > 1) {
+      keys = all_gather(comm, keys);
+      std::sort(keys.begin(), keys.end());
+      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    }
+    m = static_cast<int>(keys.size());
+    of_col.assign(n_cols, -1);
+    std::int64_t last_key = 0;
+    int last = -1;
+    for (std::size_t k = 0; k < n_cols && m > 0; ++k) {
+      if (k < n && !coupled(k)) continue;
+      if (last < 0 || sys.group[k] != last_key) {
+        const auto it = std::lower_bound(keys.begin(), keys.end(), sys.group[k]);
+        last = it != keys.end() && *it == sys.group[k] ? static_cast<int>(it - keys.begin()) : -1;
+        last_key = sys.group[k];
+        if (last < 0) continue;
+      }
+      of_col[k] = last;
+    }
+    of_row.assign(of_col.begin(), of_col.begin() + static_cast<std::ptrdiff_t>(n));
+    az.clear();
+    az.col.reserve(4 * n);
+    az.val.reserve(4 * n);
+    az.ptr.reserve(n + 1);
+  }
+
+  /// Appends the next row of A Z: its entries (col, value) summed by the group of their column.
+  void add_row(const LocalIndex* col, const Scalar* value, const std::size_t n_entries) {
+    constexpr int max_groups = 64;
+    int row_l[max_groups];
+    Scalar row_v[max_groups];
+    int n_l = 0, cur = -1, cur_l = -1;
+    Scalar run = 0;  // the sum of the current run of one group, in a register
+    for (std::size_t k = 0; k < n_entries; ++k) {
+      const int l = of_col[static_cast<std::size_t>(col[k])];
+      if (l == cur_l) {  // columns come in runs of one group: search only on a change
+        run += value[k];
+        continue;
+      }
+      if (l < 0) continue;
+      if (cur >= 0) row_v[cur] += run;
+      cur = 0;
+      while (cur < n_l && row_l[cur] != l) ++cur;
+      if (cur == n_l) {
+        if (n_l == max_groups) throw std::logic_error("pressure solve (ssor): a row meets more than 64 coarse groups");
+        row_l[n_l] = l;
+        row_v[n_l++] = 0;
+      }
+      cur_l = l;
+      run = value[k];
+    }
+    if (cur >= 0) row_v[cur] += run;
+    for (int q = 1; q < n_l; ++q)  // sorted by group
+      for (int s = q; s > 0 && row_l[s - 1] > row_l[s]; --s) {
+        std::swap(row_l[s - 1], row_l[s]);
+        std::swap(row_v[s - 1], row_v[s]);
+      }
+    for (int q = 0; q < n_l; ++q) {
+      az.col.push_back(row_l[q]);
+      az.val.push_back(row_v[q]);
+    }
+    az.ptr.push_back(static_cast<int>(az.col.size()));
+  }
+
+  /// E = Z^T (A Z) from this rank's rows of A Z and the other ranks', factorised. A collective.
+  void factorise() {
+    const std::size_t n = of_row.size();
+    std::vector<Scalar> acc(static_cast<std::size_t>(m), 0.0);
+    std::vector<char> seen(static_cast<std::size_t>(m), 0);
+    std::vector<int> touched;
+    // E = Z^T (A Z): the rows of A Z summed by their own group, as (k, l, value) on every rank.
+    std::vector<int> count(static_cast<std::size_t>(m) + 1, 0), order(n);
+    for (std::size_t i = 0; i < n; ++i)
+      if (of_row[i] >= 0) ++count[static_cast<std::size_t>(of_row[i]) + 1];
+    for (std::size_t k = 0; k < static_cast<std::size_t>(m); ++k) count[k + 1] += count[k];
+    std::vector<int> next(count.begin(), count.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      if (of_row[i] >= 0) order[static_cast<std::size_t>(next[static_cast<std::size_t>(of_row[i])]++)] = static_cast<int>(i);
+    std::vector<Scalar> triplets;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(m); ++k) {
+      for (int q = count[k]; q < count[k + 1]; ++q) {
+        const auto i = static_cast<std::size_t>(order[static_cast<std::size_t>(q)]);
+        for (int e = az.ptr[i]; e < az.ptr[i + 1]; ++e) {
+          const auto l = static_cast<std::size_t>(az.col[static_cast<std::size_t>(e)]);
+          if (!seen[l]) touched.push_back(static_cast<int>(l));
+          seen[l] = 1;
+          acc[l] += az.val[static_cast<std::size_t>(e)];
+        }
+      }
+      std::sort(touched.begin(), touched.end());
+      for (const int l : touched) {
+        triplets.insert(triplets.end(), {static_cast<Scalar>(k), static_cast<Scalar>(l), acc[static_cast<std::size_t>(l)]});
+        acc[static_cast<std::size_t>(l)] = 0;
+        seen[static_cast<std::size_t>(l)] = 0;
+      }
+      touched.clear();
+    }
+    if (n_ranks > 1) triplets = all_gather(comm, triplets);
+    std::vector<Eigen::Triplet<Scalar>> t;
+    t.reserve(triplets.size() / 3);
+    for (std::size_t q = 0; q + 2 < triplets.size(); q += 3)
+      t.emplace_back(static_cast<int>(triplets[q]), static_cast<int>(triplets[q + 1]), triplets[q + 2]);
+    Eigen::SparseMatrix<Scalar> E(m, m);
+    E.setFromTriplets(t.begin(), t.end());
+    e.compute(E);
+    if (e.info() != Eigen::Success) throw std::runtime_error("pressure solve (ssor): the coarse matrix is not positive definite");
+    g.assign(static_cast<std::size_t>(m), 0.0);
+  }
+
+  /// g = E^-1 (the sum over ranks of g), in place. A collective.
+  void solve(std::vector<Scalar>& v) const {
+    if (n_ranks > 1) MPI_Allreduce(MPI_IN_PLACE, v.data(), m, MPI_DOUBLE, MPI_SUM, comm);
+    Eigen::Map<Eigen::VectorXd> x(v.data(), m);
+    x = e.solve(x);
+  }
+  /// v = Z^T u on this rank's rows (to be summed over ranks by solve()).
+  void restrict_rows(const Scalar* u, std::vector<Scalar>& v) const {
+    v.assign(static_cast<std::size_t>(m), 0.0);
+    for (std::size_t i = 0; i < of_row.size(); ++i)
+      if (of_row[i] >= 0) v[static_cast<std::size_t>(of_row[i])] += u[i];
+  }
+};
+
 /// Symmetric Gauss-Seidel / SSOR (relaxation omega) preconditioned system by Eisenstat's trick, on each
-/// rank's diagonal block (block Jacobi between ranks, so it stays symmetric). With A = L + D + U + O (L, U
-/// the strictly lower / upper parts of the rank's block, O the couplings to other ranks' rows) and
-/// D' = D / omega, CG runs on the SPD system
+/// rank's diagonal block (block Jacobi between ranks, so it stays symmetric). With A = L + D + L^T + O (L
+/// the strictly lower part of the rank's block, O the couplings to other ranks' rows) and D' = D / omega,
+/// CG runs on the SPD system
 ///   Ah y = bh,  Ah = S A S^T,  S = D'^(1/2) (D' + L)^-1,  bh = S b,  x = S^T y,
 /// and one product with Ah costs one pass over the matrix instead of three (SpMV + forward and backward
-/// sweeps): with w = D'^(1/2) v and t = (D' + U)^-1 w,
+/// sweeps): with w = D'^(1/2) v and t = (D' + L^T)^-1 w,
 ///   Ah v = D'^(1/2) (t + (D' + L)^-1 (w + (D - 2 D') t + O t)).
-/// The system holds A itself, split: L with its rows in order, U with its rows last one first, so that
-/// each sweep streams through its own half of the matrix in increasing addresses, and O with column-map
-/// ids. No Tpetra matrix is built on this path.
+/// The block is symmetric (eq. 23's pair weights), so only L is stored: the forward sweep reads its rows
+/// as dot products, the backward sweep reads them last one first and scatters each finished unknown into
+/// the earlier rows (column-oriented L^T). Half the matrix is stored and both sweeps stream through the
+/// same arrays. O holds column-map ids. No Tpetra matrix is built on this path.
 class EisenstatSystem final : public OP {
  public:
-  CrsBlock lower;      ///< L: columns are this rank's row indices
-  CrsBlock upper_rev;  ///< U: block row r is matrix row n - 1 - r; columns are this rank's row indices
-  CrsBlock other;      ///< O: column-map ids
+  CrsBlock lower;  ///< L: columns are this rank's row indices
+  CrsBlock other;  ///< O: column-map ids
+  CoarseLevel coarse;
   std::vector<Scalar> diag, inv_dprime, sqrt_dprime, d_minus_2dprime;
   RCP<const Map> row_map;
   RCP<const Tpetra::Import<LO, GO, Node>> importer;  // null on one rank
   RCP<MV> t_row, t_col;                              // t on the row and column maps when importer is set
   mutable std::vector<Scalar> t, z;
+  std::vector<std::size_t> diag_pos_;  ///< set_rows: each row's first entry at or after the diagonal
 
   RCP<const Map> getDomainMap() const override { return row_map; }
   RCP<const Map> getRangeMap() const override { return row_map; }
   std::size_t size() const { return diag.size(); }
-  std::size_t bytes() const {
-    return lower.bytes() + upper_rev.bytes() + other.bytes() + 6 * diag.capacity() * sizeof(Scalar);
-  }
+  std::size_t bytes() const { return lower.bytes() + other.bytes() + coarse.bytes() + 6 * diag.capacity() * sizeof(Scalar); }
 
   /// Splits this rank's rows and sets up the relaxation. Throws if a row has no positive diagonal.
-  void set_rows(const LocalRows& sys, const Scalar omega) {
+  void set_rows(const LocalRows& sys, const Scalar omega, MPI_Comm comm, const int n_ranks) {
+    coarse.m = 0;
+    if (!sys.group.empty()) coarse.set_groups(sys, comm, n_ranks);
     const std::size_t n = sys.n_rows();
     const auto n_own = static_cast<LocalIndex>(n);
-    lower.clear();
-    upper_rev.clear();
-    other.clear();
-    diag.assign(n, 0.0);
-    std::vector<int>& upper_count = upper_rev.ptr;  // counts first, offsets after
-    upper_count.assign(n + 1, 0);
+    // Each row is sorted: L's columns (c < i), the diagonal, U's (i < c < n), then other ranks' (c >= n).
+    lower.ptr.resize(n + 1);
+    other.ptr.resize(n + 1);
+    std::vector<std::size_t>& diag_at = diag_pos_;
+    diag_at.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-      const auto me = static_cast<LocalIndex>(i);
-      for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k) {
-        const LocalIndex c = sys.col[k];
-        if (c == me) {
-          diag[i] += sys.value[k];
-        } else if (c >= n_own) {
-          other.col.push_back(c);
-          other.val.push_back(sys.value[k]);
-        } else if (c < me) {
-          lower.col.push_back(c);
-          lower.val.push_back(sys.value[k]);
-        } else {
-          ++upper_count[n - i];
-        }
-      }
-      lower.ptr.push_back(static_cast<int>(lower.col.size()));
-      other.ptr.push_back(static_cast<int>(other.col.size()));
+      const LocalIndex* b = sys.col.data() + sys.row_ptr[i];
+      const LocalIndex* e = sys.col.data() + sys.row_ptr[i + 1];
+      assert(std::is_sorted(b, e));
+      const LocalIndex* d = std::lower_bound(b, e, static_cast<LocalIndex>(i));
+      const LocalIndex* o = std::lower_bound(d, e, n_own);
+      diag_at[i] = static_cast<std::size_t>(d - sys.col.data());
+      lower.ptr[i + 1] = lower.ptr[i] + static_cast<int>(d - b);
+      other.ptr[i + 1] = other.ptr[i] + static_cast<int>(e - o);
+    }
+    lower.col.resize(static_cast<std::size_t>(lower.ptr[n]));
+    lower.val.resize(lower.col.size());
+    other.col.resize(static_cast<std::size_t>(other.ptr[n]));
+    other.val.resize(other.col.size());
+    diag.assign(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k0 = sys.row_ptr[i], k1 = sys.row_ptr[i + 1];
+      if (coarse.m > 0) coarse.add_row(&sys.col[k0], &sys.value[k0], k1 - k0);
+      const std::size_t n_lower = static_cast<std::size_t>(lower.ptr[i + 1] - lower.ptr[i]);
+      const std::size_t n_other = static_cast<std::size_t>(other.ptr[i + 1] - other.ptr[i]);
+      std::copy_n(&sys.col[k0], n_lower, &lower.col[static_cast<std::size_t>(lower.ptr[i])]);
+      std::copy_n(&sys.value[k0], n_lower, &lower.val[static_cast<std::size_t>(lower.ptr[i])]);
+      std::copy_n(&sys.col[k1 - n_other], n_other, &other.col[static_cast<std::size_t>(other.ptr[i])]);
+      std::copy_n(&sys.value[k1 - n_other], n_other, &other.val[static_cast<std::size_t>(other.ptr[i])]);
+      for (std::size_t k = diag_at[i]; k < k1 && sys.col[k] == static_cast<LocalIndex>(i); ++k) diag[i] += sys.value[k];
       if (!(diag[i] > 0))
         throw std::runtime_error("pressure solve (sgs): the row of global id " + std::to_string(sys.row_id[i]) +
                                  " has no positive diagonal");
-    }
-    for (std::size_t r = 0; r < n; ++r) upper_count[r + 1] += upper_count[r];
-    upper_rev.col.resize(static_cast<std::size_t>(upper_count[n]));
-    upper_rev.val.resize(upper_rev.col.size());
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto me = static_cast<LocalIndex>(i);
-      auto out = static_cast<std::size_t>(upper_rev.ptr[n - 1 - i]);
-      for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k) {
-        const LocalIndex c = sys.col[k];
-        if (c > me && c < n_own) {
-          upper_rev.col[out] = c;
-          upper_rev.val[out++] = sys.value[k];
-        }
-      }
     }
     inv_dprime.resize(n);
     sqrt_dprime.resize(n);
@@ -200,14 +354,24 @@ class EisenstatSystem final : public OP {
       sqrt_dprime[i] = std::sqrt(dprime);
       d_minus_2dprime[i] = diag[i] - 2 * dprime;
     }
+    if (coarse.m > 0) coarse.factorise();
   }
 
-  /// (D' + U)^-1 w, backward (out may be w).
+  /// acc[j] -= L_ij x_i over the entries of row i of L (the column of L^T: row j of L^T x gets L_ij x_i).
+  void scatter_lower(const std::size_t i, const Scalar xi, Scalar* acc) const {
+    const int* c = lower.col.data();
+    const Scalar* v = lower.val.data();
+    for (int k = lower.ptr[i]; k < lower.ptr[i + 1]; ++k) acc[c[k]] -= v[k] * xi;
+  }
+
+  /// (D' + L^T)^-1 w, backward (out may be w).
   void backward(const Scalar* w, Scalar* out) const {
     const std::size_t n = size();
+    if (out != w) std::copy(w, w + n, out);
     for (std::size_t r = 0; r < n; ++r) {
       const std::size_t i = n - 1 - r;
-      out[i] = (w[i] - upper_rev.row_dot(r, out)) * inv_dprime[i];
+      out[i] *= inv_dprime[i];
+      scatter_lower(i, out[i], out);
     }
   }
   /// (D' + L)^-1 s, forward (out may be s).
@@ -215,9 +379,11 @@ class EisenstatSystem final : public OP {
     const std::size_t n = size();
     for (std::size_t i = 0; i < n; ++i) out[i] = (s[i] - lower.row_dot(i, out)) * inv_dprime[i];
   }
-  /// (D' + U) x, this rank's block only.
-  Scalar upper_times(const std::size_t i, const Scalar* x) const {
-    return x[i] / inv_dprime[i] + upper_rev.row_dot(size() - 1 - i, x);
+  /// out = (D' + L^T) x, this rank's block only.
+  void upper_times(const Scalar* x, Scalar* out) const {
+    const std::size_t n = size();
+    for (std::size_t i = 0; i < n; ++i) out[i] = x[i] / inv_dprime[i];
+    for (std::size_t i = 0; i < n; ++i) scatter_lower(i, -x[i], out);
   }
 
   /// The columns of other ranks' rows of `x` (row map) on the column map, or null on one rank.
@@ -235,10 +401,12 @@ class EisenstatSystem final : public OP {
   void residual(const Scalar* b, const Scalar* x, Scalar* r) const {
     const std::size_t n = size();
     const Scalar* xc = import(x);
+    std::copy(b, b + n, r);
     for (std::size_t i = 0; i < n; ++i) {
-      Scalar ax = diag[i] * x[i] + lower.row_dot(i, x) + upper_rev.row_dot(n - 1 - i, x);
+      Scalar ax = diag[i] * x[i] + lower.row_dot(i, x);
       if (xc) ax += other.row_dot(i, xc);
-      r[i] = b[i] - ax;
+      r[i] -= ax;
+      scatter_lower(i, x[i], r);  // the L^T x part
     }
   }
 
@@ -254,20 +422,36 @@ class EisenstatSystem final : public OP {
       {
         auto xv = X.getLocalViewHost(Tpetra::Access::ReadOnly);
         const Scalar* v = n ? &xv(0, c) : nullptr;
-        // Backward sweep t = (D' + U)^-1 w with w = D'^(1/2) v, fused with s = w + (D - 2 D') t in z.
+        // Backward sweep t = (D' + L^T)^-1 w with w = D'^(1/2) v (t starts as w and receives the scattered
+        // rows), fused with s = w + (D - 2 D') t in z.
+        for (std::size_t i = 0; i < n; ++i) tp[i] = sqrt_dprime[i] * v[i];
+        const bool two_level = coarse.m > 0;
+        if (two_level) coarse.g.assign(static_cast<std::size_t>(coarse.m), 0.0);
+        Scalar* g = coarse.g.data();
         for (std::size_t r = 0; r < n; ++r) {
           const std::size_t i = n - 1 - r;
           const Scalar w = sqrt_dprime[i] * v[i];
-          tp[i] = (w - upper_rev.row_dot(r, tp)) * inv_dprime[i];
+          tp[i] *= inv_dprime[i];
           zp[i] = w + d_minus_2dprime[i] * tp[i];
+          scatter_lower(i, tp[i], tp);
+          if (two_level)  // g = (A Z)^T t
+            for (int k = coarse.az.ptr[i]; k < coarse.az.ptr[i + 1]; ++k) g[coarse.az.col[k]] += coarse.az.val[k] * tp[i];
         }
       }
       if (const Scalar* tc = import(tp))  // s += O t (couplings to the other ranks' rows)
         for (std::size_t i = 0; i < n; ++i) zp[i] += other.row_dot(i, tc);
+      // Deflation: s -= A Z E^-1 Z^T A t (with the forward sweep below: P Ah v, P = I - Ah Zh E^-1 Zh^T,
+      // Zh = S^-T Z).
+      const Scalar* cg = nullptr;
+      if (coarse.m > 0) {
+        coarse.solve(coarse.g);
+        cg = coarse.g.data();
+      }
       // Forward sweep in place z = (D' + L)^-1 s (row i reads s_i before writing it, and finished rows
       // j < i), fused with Y = alpha D'^(1/2) (t + z) + beta Y.
       auto yv = Y.getLocalViewHost(Tpetra::Access::ReadWrite);
       for (std::size_t i = 0; i < n; ++i) {
+        if (cg) zp[i] -= coarse.az.row_dot(i, cg);
         zp[i] = (zp[i] - lower.row_dot(i, zp)) * inv_dprime[i];
         const Scalar r = alpha * sqrt_dprime[i] * (tp[i] + zp[i]);
         yv(i, c) = beta == Scalar(0) ? r : beta * yv(i, c) + r;
@@ -445,8 +629,8 @@ class TrilinosPressureSolver final : public PressureSolver {
     result.tolerance = settings_.tolerance;
     if (sys.absolute_tolerance > 0)
       result.tolerance = std::max(result.tolerance, std::min<Scalar>(0.1, sys.absolute_tolerance / bnorm[0]));
-    set_belos_tolerance(result.tolerance);
     if (eisenstat_) return solve_eisenstat(sys, x, result, bnorm[0], t0);
+    set_belos_tolerance(result.tolerance);
     RCP<OP> prec = setup_preconditioner(sys);
     result.t_setup = seconds_since(t0);
 
@@ -495,25 +679,46 @@ class TrilinosPressureSolver final : public PressureSolver {
   PressureSolveResult solve_eisenstat(const LocalRows& sys, std::vector<Real>& x, PressureSolveResult& result,
                                       const Scalar bnorm, Clock::time_point t0) {
     EisenstatSystem& E = *eis_;
+    CoarseLevel& C = E.coarse;
     const std::size_t n = sys.n_rows();
+    Scalar tol = result.tolerance;
     {
       auto b = b_->getLocalViewHost(Tpetra::Access::ReadOnly);
       auto x0 = x_->getLocalViewHost(Tpetra::Access::ReadOnly);
       auto bh = bh_->getLocalViewHost(Tpetra::Access::OverwriteAll);
       auto y = y_->getLocalViewHost(Tpetra::Access::OverwriteAll);
-      E.forward(&b(0, 0), &bh(0, 0));
+      E.t.resize(n);
+      const Scalar* rhs = n ? &b(0, 0) : nullptr;
+      if (C.m > 0) {  // the deflated right-hand side P bh = S (b - A Z E^-1 Z^T b)
+        C.restrict_rows(rhs, C.g);
+        C.solve(C.g);
+        Scalar norms[2] = {0, 0};
+        for (std::size_t i = 0; i < n; ++i) {
+          E.t[i] = rhs[i] - C.az.row_dot(i, C.g.data());
+          norms[0] += rhs[i] * rhs[i];
+          norms[1] += E.t[i] * E.t[i];
+        }
+        if (n_ranks_ > 1) MPI_Allreduce(MPI_IN_PLACE, norms, 2, MPI_DOUBLE, MPI_SUM, raw_comm_);
+        // The same stop on the transformed residual as without the coarse level (it is relative to
+        // the norm of the deflated right-hand side).
+        if (norms[1] > 0) tol = std::min<Scalar>(0.1, tol * std::sqrt(norms[0] / norms[1]));
+        E.forward(E.t.data(), &bh(0, 0));
+      } else if (n) {
+        E.forward(rhs, &bh(0, 0));
+      }
+      if (n) E.upper_times(&x0(0, 0), E.t.data());
       for (std::size_t i = 0; i < n; ++i) {
         bh(i, 0) *= E.sqrt_dprime[i];
-        y(i, 0) = E.upper_times(i, &x0(0, 0)) / E.sqrt_dprime[i];
+        y(i, 0) = E.t[i] / E.sqrt_dprime[i];
       }
     }
     result.t_setup = seconds_since(t0);
 
     t0 = Clock::now();
+    set_belos_tolerance(tol);
     auto problem = rcp(new Belos::LinearProblem<Scalar, MV, OP>(eis_, y_, bh_));
     problem->setProblem();
     belos_->setProblem(problem);
-    Scalar tol = result.tolerance;
     Belos::ReturnType ret = Belos::Unconverged;
     for (int round = 0; round < 3; ++round) {
       ret = belos_->solve();
@@ -523,13 +728,23 @@ class TrilinosPressureSolver final : public PressureSolver {
         auto xv = x_->getLocalViewHost(Tpetra::Access::OverwriteAll);
         E.t.resize(n);
         for (std::size_t i = 0; i < n; ++i) E.t[i] = E.sqrt_dprime[i] * y(i, 0);
-        E.backward(E.t.data(), &xv(0, 0));
+        if (n) E.backward(E.t.data(), &xv(0, 0));
       }
       {
-        auto xv = x_->getLocalViewHost(Tpetra::Access::ReadOnly);
+        auto xv = x_->getLocalViewHost(Tpetra::Access::ReadWrite);
         auto bv = b_->getLocalViewHost(Tpetra::Access::ReadOnly);
         auto rv = r_->getLocalViewHost(Tpetra::Access::OverwriteAll);
-        if (n) E.residual(&bv(0, 0), &xv(0, 0), &rv(0, 0));
+        Scalar* x = n ? &xv(0, 0) : nullptr;
+        Scalar* r = n ? &rv(0, 0) : nullptr;
+        E.residual(n ? &bv(0, 0) : nullptr, x, r);
+        if (C.m > 0) {  // the coarse part: x += Z E^-1 Z^T r, r -= A Z E^-1 Z^T r
+          C.restrict_rows(r, C.g);
+          C.solve(C.g);
+          for (std::size_t i = 0; i < n; ++i) {
+            if (C.of_row[i] >= 0) x[i] += C.g[static_cast<std::size_t>(C.of_row[i])];
+            r[i] -= C.az.row_dot(i, C.g.data());
+          }
+        }
       }
       Teuchos::Array<Scalar> rnorm(1);
       r_->norm2(rnorm());
@@ -552,8 +767,8 @@ class TrilinosPressureSolver final : public PressureSolver {
 
   /// The EisenstatSystem of this system's rows (the matrix split into L, D, U and O).
   void setup_eisenstat(const LocalRows& sys) {
-    if (eis_.is_null() || eis_->row_map != row_map_) {
-      eis_ = rcp(new EisenstatSystem);
+    if (eis_.is_null()) eis_ = rcp(new EisenstatSystem);  // kept: its arrays keep their capacity
+    if (eis_->row_map != row_map_) {
       eis_->row_map = row_map_;
       bh_ = rcp(new MV(row_map_, 1));
       y_ = rcp(new MV(row_map_, 1));
@@ -564,7 +779,7 @@ class TrilinosPressureSolver final : public PressureSolver {
       E.t_row = rcp(new MV(row_map_, 1));
       E.t_col = rcp(new MV(col_map_, 1));
     }
-    E.set_rows(sys, omega_);
+    E.set_rows(sys, omega_, raw_comm_, n_ranks_);
     precond_bytes_ = E.bytes();
   }
 

@@ -1,7 +1,9 @@
 // Splitting a pressure system held whole into the blocks of rows of several ranks (tests, benchmarks).
 #include "fluid/pressure_solver.hpp"
 
+#include <algorithm>
 #include <cassert>
+#include <utility>
 
 namespace mpsfsi {
 
@@ -20,8 +22,8 @@ LocalRows split_system(const LocalRows& whole, const int rank, const int n_ranks
   s.absolute_tolerance = whole.absolute_tolerance;
   s.row_id.assign(whole.row_id.begin() + static_cast<std::ptrdiff_t>(begin), whole.row_id.begin() + static_cast<std::ptrdiff_t>(end));
   s.rhs.assign(whole.rhs.begin() + static_cast<std::ptrdiff_t>(begin), whole.rhs.begin() + static_cast<std::ptrdiff_t>(end));
-  // Remote columns numbered in order of the whole system's rows (so by rank, then row): their local ids
-  // keep each row's columns sorted when the whole system's were.
+  // Remote columns numbered in order of the whole system's rows (so by rank, then row), after the own rows;
+  // each row's columns are sorted by local id (the LocalRows contract).
   std::vector<LocalIndex> local_of(n, -1);
   const LocalIndex n_own = static_cast<LocalIndex>(end - begin);
   for (std::size_t i = begin; i < end; ++i)
@@ -37,11 +39,21 @@ LocalRows split_system(const LocalRows& whole, const int rank, const int n_ranks
       s.remote_id.push_back(whole.row_id[c]);
       s.remote_rank.push_back(rank_of(c));
     }
+  if (!whole.group.empty()) {  // the groups of the own rows, then of the remote columns
+    s.group.assign(whole.group.begin() + static_cast<std::ptrdiff_t>(begin), whole.group.begin() + static_cast<std::ptrdiff_t>(end));
+    for (std::size_t c = 0; c < n; ++c)
+      if (local_of[c] >= n_own) s.group.push_back(whole.group[c]);
+  }
   s.row_ptr.assign(1, 0);
+  std::vector<std::pair<LocalIndex, Real>> row;
   for (std::size_t i = begin; i < end; ++i) {
-    for (std::size_t k = whole.row_ptr[i]; k < whole.row_ptr[i + 1]; ++k) {
-      s.col.push_back(local_of[static_cast<std::size_t>(whole.col[k])]);
-      s.value.push_back(whole.value[k]);
+    row.clear();
+    for (std::size_t k = whole.row_ptr[i]; k < whole.row_ptr[i + 1]; ++k)
+      row.emplace_back(local_of[static_cast<std::size_t>(whole.col[k])], whole.value[k]);
+    std::stable_sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [c, v] : row) {
+      s.col.push_back(c);
+      s.value.push_back(v);
     }
     s.row_ptr.push_back(s.col.size());
   }

@@ -997,6 +997,10 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidParamet
   n.preconditioner_rebuild_every =
       r.integer("preconditioner_rebuild_every", n.preconditioner_rebuild_every, [](const long long k) { return k >= 1; },
                 "a positive integer (full preconditioner setup every N steps)");
+  n.coarse_size = r.number("coarse_size", n.coarse_size, [&](const Real x) { return x == 0 || x >= n.re_laplacian; },
+                           fmt::format("0 or a number >= re_laplacian = {} (side of the coarse groups of the sgs / ssor "
+                                       "pressure solve, in units of dp; 0: one level)",
+                                       n.re_laplacian));
   n.max_loss = r.number("max_loss", n.max_loss, in_closed(0, 1),
                         "a number in [0, 1] (largest share of a fluid body's particles that may leave the domain before "
                         "the run stops)");
@@ -1437,7 +1441,7 @@ const std::vector<std::string>& restart_tunable_keys() {
   static const std::vector<std::string> keys = {
       "time.cfl",       "time.dt",         "time.dt_max",         "coupling.subcycles",
       "fluid.solver",   "fluid.preconditioner", "fluid.tolerance", "fluid.max_iterations",
-      "fluid.preconditioner_rebuild_every", "fluid.max_loss", "solid.dt", "solid.dt_factor", "parallel"};
+      "fluid.preconditioner_rebuild_every", "fluid.coarse_size", "fluid.max_loss", "solid.dt", "solid.dt_factor", "parallel"};
   return keys;
 }
 

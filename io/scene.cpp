@@ -95,20 +95,41 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, Scene& scene) {
   scene.counts.push_back(count);
 }
 
-/// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart).
+/// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart). The particles
+/// sorted by cells of side dp/2 (memory of the particles only, not of a grid over the domain's box).
 void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
-  NeighbourList nl;
-  build_neighbour_list(p.position, 0.5 * spec.dp, nl);
+  const Real h = 0.5 * spec.dp;
+  const auto cell_of = [&](const Vec& x) { return IVec((x / h).array().floor().cast<int>()); };
+  std::vector<std::pair<IVec, std::size_t>> cells(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) {
-    for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
-      const auto j = static_cast<std::size_t>(nl.index[k]);
-      if (p.body[i] == p.body[j]) continue;
-      throw CaseError(fmt::format(
-          "{}: bodies '{}' and '{}' overlap: particles at ({:.6g}, {:.6g}) and ({:.6g}, {:.6g}) are closer than dp/2; "
-          "expected bodies that at most touch",
-          spec.file, p.bodies[p.body[i]].name, p.bodies[p.body[j]].name, p.position[i][0], p.position[i][1],
-          p.position[j][0], p.position[j][1]));
+    if (!p.position[i].allFinite()) throw CaseError(fmt::format("{}: a particle position is not finite", spec.file));
+    cells[i] = {cell_of(p.position[i]), i};
+  }
+  const auto less = [](const IVec& a, const IVec& b) {
+    return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
+  };
+  std::sort(cells.begin(), cells.end(), [&](const auto& a, const auto& b) { return less(a.first, b.first) || (a.first == b.first && a.second < b.second); });
+  constexpr int n_near = dim == 2 ? 9 : 27;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    // The first pair in index order: the lowest i, then its lowest j (then i < j).
+    const IVec c = cell_of(p.position[i]);
+    std::size_t j_min = p.size();
+    for (int n = 0; n < n_near; ++n) {
+      IVec q = c;
+      for (int a = 0, k = n; a < dim; ++a, k /= 3) q[a] += k % 3 - 1;
+      auto it = std::lower_bound(cells.begin(), cells.end(), q, [&](const auto& e, const IVec& key) { return less(e.first, key); });
+      for (; it != cells.end() && it->first == q; ++it) {
+        const std::size_t j = it->second;
+        if (p.body[i] != p.body[j] && in_support((p.position[j] - p.position[i]).squaredNorm(), h)) j_min = std::min(j_min, j);
+      }
     }
+    if (j_min == p.size()) continue;
+    const std::size_t j = j_min;
+    throw CaseError(fmt::format(
+        "{}: bodies '{}' and '{}' overlap: particles at ({:.6g}, {:.6g}) and ({:.6g}, {:.6g}) are closer than dp/2; "
+        "expected bodies that at most touch",
+        spec.file, p.bodies[p.body[i]].name, p.bodies[p.body[j]].name, p.position[i][0], p.position[i][1],
+        p.position[j][0], p.position[j][1]));
   }
 }
 

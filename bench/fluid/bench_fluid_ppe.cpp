@@ -7,7 +7,8 @@
 // true residual, and whether every solve converged.
 // Usage: mpirun -np R bench_fluid_ppe n_steps dp variant...
 //   variant = label:preconditioner[:key=value[,key=value...]]
-//   keys: rebuild_every, rebuild_growth, tolerance, solver, max_iterations; any other key is passed to
+//   keys: rebuild_every, rebuild_growth, tolerance, solver, max_iterations, coarse (0: the sgs / ssor
+//   without the fluid's coarse groups, fluid.coarse_size); any other key is passed to
 //   the preconditioner (PressureSolverSettings::parameters, MueLu / Ifpack2 names; ' ' may be written '_' in keys and values).
 // Example: bench_fluid_ppe 100 0.0016 jac:jacobi sgs:sgs mu5:muelu:rebuild_every=5
 // Results go to docs/performance.md (## Fluid, ### Pressure solve).
@@ -38,6 +39,7 @@ struct Variant {
   double setup = 0, solve = 0, matrix = 0, max_residual = 0;
   long iterations = 0;
   int max_iterations = 0, failures = 0;
+  bool one_level = false;  ///< coarse=0: the system without its coarse groups (sgs / ssor on one level)
 };
 
 std::vector<std::string> split(const std::string& s, const char sep) {
@@ -74,6 +76,7 @@ Variant parse_variant(const std::string& text, const CaseSpec& spec) {
       std::string key = kv.substr(0, eq);
       const std::string value = kv.substr(eq + 1);
       if (key == "rebuild_every") v.settings.rebuild_every = std::stoi(value);
+      else if (key == "coarse") v.one_level = value == "0";
       else if (key == "rebuild_growth") v.settings.rebuild_growth = std::stod(value);
       else if (key == "tolerance") v.settings.tolerance = std::stod(value);
       else if (key == "max_iterations") v.settings.max_iterations = std::stoi(value);
@@ -141,6 +144,7 @@ int main(int argc, char** argv) {
       for (auto& v : variants) {
         // This rank's block of the full system.
         mine = split_system(sys, rank, size);
+        if (v.one_level) mine.group.clear();
         const std::size_t begin = rows / static_cast<std::size_t>(size) * static_cast<std::size_t>(rank) +
                                   std::min(rows % static_cast<std::size_t>(size), static_cast<std::size_t>(rank));
         x.assign(x0.begin() + static_cast<std::ptrdiff_t>(begin), x0.begin() + static_cast<std::ptrdiff_t>(begin + mine.n_rows()));

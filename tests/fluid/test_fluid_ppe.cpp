@@ -146,9 +146,12 @@ class PressureSolve : public ::testing::TestWithParam<std::pair<const char*, con
 
 namespace {
 /// Solves the shifted 5-point system below with `settings` and `absolute_tolerance`; returns the
-/// solver's result and the true ||b - Ax|| / ||b|| recomputed from the CRS arrays.
+/// solver's result and the true ||b - Ax|| / ||b|| recomputed from the CRS arrays. With `coarse` > 0 the
+/// rows are in groups of coarse x coarse grid points (the two-level sgs / ssor); with `dirichlet_top` the
+/// top row of points are identity rows, dropped from the other rows (like the free surface).
 std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSettings& settings,
-                                                         const Real absolute_tolerance, Real* b_norm = nullptr) {
+                                                         const Real absolute_tolerance, Real* b_norm = nullptr,
+                                                         const int coarse = 0, const bool dirichlet_top = false) {
   auto solver = make_pressure_solver(settings, MPI_COMM_WORLD);
   int rank = 0, n_ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -163,16 +166,22 @@ std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSet
   for (std::size_t r = 0; r < n; ++r) {
     whole.row_id.push_back(1000 + 3 * static_cast<GlobalId>(r));
     const int ix = static_cast<int>(r) % m, iy = static_cast<int>(r) / m;
+    if (coarse > 0) whole.group.push_back(static_cast<std::int64_t>(iy / coarse) * 1000 + ix / coarse);
     const auto add = [&](int jx, int jy, Real v) {
       if (jx < 0 || jy < 0 || jx >= m || jy >= m) return;
+      if (dirichlet_top && jy == m - 1 && jy != iy) return;
       whole.col.push_back(jy * m + jx);
       whole.value.push_back(v);
     };
-    add(ix, iy - 1, -1);
-    add(ix - 1, iy, -1);
-    add(ix, iy, 4.01);
-    add(ix + 1, iy, -1);
-    add(ix, iy + 1, -1);
+    if (dirichlet_top && iy == m - 1) {
+      add(ix, iy, 4.01);
+    } else {
+      add(ix, iy - 1, -1);
+      add(ix - 1, iy, -1);
+      add(ix, iy, 4.01);
+      add(ix + 1, iy, -1);
+      add(ix, iy + 1, -1);
+    }
     whole.row_ptr.push_back(whole.col.size());
     whole.rhs.push_back(u(rng));
   }
@@ -237,6 +246,29 @@ INSTANTIATE_TEST_SUITE_P(AllChoices, PressureSolve,
                                            std::make_pair("cg", "none"), std::make_pair("gmres", "muelu"),
                                            std::make_pair("gmres", "ilu"), std::make_pair("cg", "sgs"),
                                            std::make_pair("cg", "ssor"), std::make_pair("gmres", "ssor")));
+
+// The two-level sgs / ssor (rows in groups of 4 x 4 points, fluid.coarse_size): the same true residual in
+// at most 0.6 times the iterations of one level (measured: sgs 31 -> 18 on one rank, ssor 37 -> 19), with identity rows (in no group) and groups that span the ranks' blocks of
+// rows (this test also runs on 2 and 3 ranks).
+TEST(PressureSolve, TwoLevelSsorNeedsFewerIterations) {
+  for (const Preconditioner prec : {Preconditioner::sgs, Preconditioner::ssor}) {
+    PressureSolverSettings settings;
+    settings.preconditioner = prec;
+    settings.tolerance = 1e-10;
+    settings.max_iterations = 2000;
+    for (const bool dirichlet_top : {false, true}) {
+      const auto [one, one_residual] = solve_model_problem(settings, 0, nullptr, 0, dirichlet_top);
+      const auto [two, two_residual] = solve_model_problem(settings, 0, nullptr, 4, dirichlet_top);
+      SCOPED_TRACE(std::string(to_string(prec)) + (dirichlet_top ? ", identity rows" : ""));
+      EXPECT_TRUE(one.converged);
+      EXPECT_TRUE(two.converged);
+      EXPECT_LT(one_residual, 10 * settings.tolerance);
+      EXPECT_LT(two_residual, 10 * settings.tolerance);
+      EXPECT_NEAR(two.residual, two_residual, 1e-3 * two_residual + 1e-14);
+      EXPECT_LT(5 * two.iterations, 3 * one.iterations) << two.iterations << " vs " << one.iterations;
+    }
+  }
+}
 
 TEST(PressureSolve, RejectsUnknownChoices) {
   PressureSolverSettings settings;
