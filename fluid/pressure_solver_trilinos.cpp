@@ -374,16 +374,15 @@ class EisenstatSystem final : public OP {
       scatter_lower(i, out[i], out);
     }
   }
-  /// (D' + L)^-1 s, forward (out may be s).
-  void forward(const Scalar* s, Scalar* out) const {
+  /// One pass over L: fwd = (D' + L)^-1 s (forward sweep, fwd may be s) and up = (D' + L^T) x (row i of
+  /// L scatters x_i into the earlier rows, which were set before).
+  void forward_and_upper_times(const Scalar* s, Scalar* fwd, const Scalar* x, Scalar* up) const {
     const std::size_t n = size();
-    for (std::size_t i = 0; i < n; ++i) out[i] = (s[i] - lower.row_dot(i, out)) * inv_dprime[i];
-  }
-  /// out = (D' + L^T) x, this rank's block only.
-  void upper_times(const Scalar* x, Scalar* out) const {
-    const std::size_t n = size();
-    for (std::size_t i = 0; i < n; ++i) out[i] = x[i] / inv_dprime[i];
-    for (std::size_t i = 0; i < n; ++i) scatter_lower(i, -x[i], out);
+    for (std::size_t i = 0; i < n; ++i) {
+      fwd[i] = (s[i] - lower.row_dot(i, fwd)) * inv_dprime[i];
+      up[i] = x[i] / inv_dprime[i];
+      scatter_lower(i, -x[i], up);
+    }
   }
 
   /// The columns of other ranks' rows of `x` (row map) on the column map, or null on one rank.
@@ -702,14 +701,13 @@ class TrilinosPressureSolver final : public PressureSolver {
         // The same stop on the transformed residual as without the coarse level (it is relative to
         // the norm of the deflated right-hand side).
         if (norms[1] > 0) tol = std::min<Scalar>(0.1, tol * std::sqrt(norms[0] / norms[1]));
-        E.forward(E.t.data(), &bh(0, 0));
-      } else if (n) {
-        E.forward(rhs, &bh(0, 0));
+        rhs = E.t.data();
       }
-      if (n) E.upper_times(&x0(0, 0), E.t.data());
+      E.z.resize(n);  // (D' + U) x0, for the start y0
+      if (n) E.forward_and_upper_times(rhs, &bh(0, 0), &x0(0, 0), E.z.data());
       for (std::size_t i = 0; i < n; ++i) {
         bh(i, 0) *= E.sqrt_dprime[i];
-        y(i, 0) = E.t[i] / E.sqrt_dprime[i];
+        y(i, 0) = E.z[i] / E.sqrt_dprime[i];
       }
     }
     result.t_setup = seconds_since(t0);
