@@ -88,8 +88,8 @@ struct FluidParameters {
   Real beta2 = 0.85;            ///< ... and N_i < beta2 N0
   PressureGradient gradient = PressureGradient::min_pressure;
   KrylovSolver solver = KrylovSolver::cg;
-  /// Default ssor (Eisenstat SSOR, omega 1.4): the fastest measured on the dam break, setup + solve 25.5 ms
-  /// per step against 37.4 (jacobi) and 110 (muelu, rebuilt every step), docs/performance.md "Pressure solve".
+  /// Default ssor (Eisenstat SSOR, omega 1.4, with the coarse level of coarse_size): the fastest measured on
+  /// the dam break (docs/performance.md, "Pressure solve" and "Parallel runs").
   Preconditioner preconditioner = Preconditioner::ssor;
   Real tolerance = 1e-8;                  ///< relative residual of the pressure solve
   /// Absolute stop of the pressure solve tied to the incompressibility error: the solve also stops when
@@ -100,7 +100,7 @@ struct FluidParameters {
   int max_iterations = 500;
   int preconditioner_rebuild_every = 1;   ///< full preconditioner setup every N steps, kept in between
   /// sgs / ssor: side of the coarse groups of the two-level solve, in units of dp (square cells of space;
-  /// 0: one level). At least re_laplacian, so that a row meets at most 3^dim groups. 8 is the fastest
+  /// 0: one level). At least re_laplacian, so that a row meets at most 3^dim groups. 8: the fastest
   /// measured (docs/performance.md, ## Parallel runs).
   Real coarse_size = 8;
   LateralWallFriction lateral_walls;      ///< quasi-2D lateral-wall friction (off by default)
