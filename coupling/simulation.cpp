@@ -112,7 +112,7 @@ class RunLoop {
     ds.halo_width = std::max(has_fluid ? fluid_interaction_radius(fluid_setup(spec)) : 0.0,
                              has_solid ? solid_interaction_radius(solid_setup(spec)) : 0.0) + ds.skin;
     dist_ = std::make_unique<Distribution>(comm, ds);
-    dist_->distribute_replicated(p_);
+    dist_->distribute_replicated(p_, work_weights(p_.size()));
     if (has_fluid)
       fluid_ = std::make_unique<FluidSolver>(fluid_setup(spec), p_, *dist_, has_solid ? FsiInterface::fluid_options() : FluidOptions{});
     // The solid and the coupling, distributed like the fluid (their constructors are collectives that throw on
@@ -249,7 +249,8 @@ class RunLoop {
     }
     if (n_ranks_ > 1 && step_ % repartition_every == 0) {
       const auto t0 = Clock::now();
-      if (dist_->imbalance(p_) > dist_->settings().imbalance_threshold) dist_->partition(p_);
+      const std::vector<Real> w = work_weights(p_.n_owned());
+      if (dist_->imbalance(p_, w) > dist_->settings().imbalance_threshold) dist_->partition(p_, w);
       summary_.t_fluid += seconds_since(t0);
     }
     try {
@@ -740,6 +741,13 @@ class RunLoop {
   bool has_solid_ = false;  ///< the case has a solid
   /// Steps between checks of the owned work's balance (re-partition above the threshold).
   static constexpr std::size_t repartition_every = 20;
+  /// The partition weights of the first n particles: their work in a fluid step (fluid_work_weight; solid
+  /// particles 1).
+  std::vector<Real> work_weights(const std::size_t n) const {
+    std::vector<Real> w(n);
+    for (std::size_t i = 0; i < n; ++i) w[i] = fluid_work_weight(p_.kind[i]);
+    return w;
+  }
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<SolidSolver> solid_;
   std::unique_ptr<FsiInterface> coupling_;

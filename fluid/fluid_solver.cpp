@@ -456,6 +456,12 @@ struct FluidSolver::Impl {
   std::vector<std::uint8_t> remove;
 };
 
+Real fluid_work_weight(const ParticleKind kind) {
+  if (kind == ParticleKind::wall) return 0.8;
+  if (kind == ParticleKind::dummy) return 0.2;
+  return 1.0;
+}
+
 Real fluid_interaction_radius(const FluidSetup& setup) {
   return std::max(setup.parameters.re_gradient, setup.parameters.re_laplacian) * setup.dp;
 }

@@ -61,6 +61,11 @@ struct FluidOptions {
 /// must reach at least this far, plus the distance particles move in a step.
 Real fluid_interaction_radius(const FluidSetup& setup);
 
+/// Work of one particle of `kind` in a fluid step relative to a fluid particle, for the partition of the
+/// particles over the ranks: every particle is in the neighbour search, walls also have pressure rows, fluid
+/// particles also the explicit phases (docs/performance.md, ## Parallel runs). Other kinds: 1.
+Real fluid_work_weight(ParticleKind kind);
+
 /// Largest admissible fluid dt: time.dt when fixed, else the smallest of time.dt_max, the CFL limit of
 /// eq. 52 for the largest speed v_max, the same limit for a particle that starts at rest under the
 /// acceleration |g| (sqrt(C dp / |g|)) and the viscous limit viscous_number dp^2 / nu. `limit`, if given,

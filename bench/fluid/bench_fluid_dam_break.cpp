@@ -38,7 +38,9 @@ int main(int argc, char** argv) {
     ds.skin = spec.parallel.skin * spec.dp;
     ds.halo_width = fluid_interaction_radius(fluid_setup(spec)) + ds.skin;
     Distribution dist(MPI_COMM_WORLD, ds);
-    dist.distribute_replicated(p);
+    std::vector<Real> weights(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) weights[i] = fluid_work_weight(p.kind[i]);
+    dist.distribute_replicated(p, weights);
     FluidSolver fluid(fluid_setup(spec), p, dist);
     FluidStepReport sum;
     long iterations = 0;
