@@ -12,6 +12,7 @@
 #include <Zoltan2_PartitioningProblem.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <chrono>
 #include <climits>
@@ -149,6 +150,7 @@ struct Distribution::Impl {
   std::size_t plan_owned = 0, plan_ghost = 0;        ///< the set the plan was built for
   bool have_plan = false;
   std::vector<Vec> x_at_plan;                        ///< the owned particles' positions at build_ghosts()
+  std::array<std::vector<LocalIndex>, 4> owned_of_kind;  ///< the owned particles of each kind at build_ghosts()
 };
 
 Distribution::Distribution(MPI_Comm comm, const DistributionSettings& settings)
@@ -399,7 +401,7 @@ void Distribution::migrate(ParticleSet& p) {
 // ---------------------------------------------------------------------------------------------------------------
 // Ghosts
 
-bool Distribution::needs_rebuild(const ParticleSet& p, const bool requested) const {
+bool Distribution::needs_rebuild(const ParticleSet& p, const bool requested, const std::optional<ParticleKind> only) const {
   const Impl& m = *impl_;
   int rebuild = requested ? 1 : 0;
   if (n_ranks_ > 1) {
@@ -407,7 +409,12 @@ bool Distribution::needs_rebuild(const ParticleSet& p, const bool requested) con
       rebuild = 1;
     } else {
       Real moved2 = 0;
-      for (std::size_t i = 0; i < p.n_owned(); ++i) moved2 = std::max(moved2, (p.position[i] - m.x_at_plan[i]).squaredNorm());
+      if (only) {
+        for (const LocalIndex i : m.owned_of_kind[static_cast<std::size_t>(*only)])
+          moved2 = std::max(moved2, (p.position[static_cast<std::size_t>(i)] - m.x_at_plan[static_cast<std::size_t>(i)]).squaredNorm());
+      } else {
+        for (std::size_t i = 0; i < p.n_owned(); ++i) moved2 = std::max(moved2, (p.position[i] - m.x_at_plan[i]).squaredNorm());
+      }
       // Two particles approach each other by at most twice the largest displacement.
       if (!(2 * std::sqrt(moved2) <= settings_.skin)) rebuild = 1;
     }
@@ -510,6 +517,9 @@ void Distribution::build_ghosts(ParticleSet& p) {
   ++stats_.n_ghost_builds;
   m.plan_owned = p.n_owned();
   m.x_at_plan.assign(p.position.begin(), p.position.begin() + static_cast<std::ptrdiff_t>(p.n_owned()));
+  for (auto& list : m.owned_of_kind) list.clear();
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    m.owned_of_kind[static_cast<std::size_t>(p.kind[i])].push_back(static_cast<LocalIndex>(i));
   m.plan_ghost = 0;
   m.have_plan = true;
   if (n_ranks_ == 1) {
@@ -613,7 +623,7 @@ std::size_t swap_buffers(MPI_Comm comm, const int tag, const std::vector<std::ve
 
 bool Distribution::renew(ParticleSet& p, const std::vector<std::string>& fields, const std::optional<ParticleKind> only,
                          const bool requested, const std::function<void()>& before_ghosts) {
-  if (!needs_rebuild(p, requested)) {
+  if (!needs_rebuild(p, requested, only)) {
     exchange_ghosts(p, fields, only);
     return false;
   }

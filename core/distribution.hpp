@@ -100,12 +100,14 @@ class Distribution {
   void build_ghosts(ParticleSet& p);
   /// Whether the owners and ghosts must be renewed (migrate, build_ghosts) before the particles are used
   /// again: `requested` on some rank, the ghost plan does not fit the particles (removed, migrated), or a
-  /// particle moved more than half the skin since the last build_ghosts(). Always false on one rank unless
-  /// requested. Collective: every rank gets the same answer.
-  bool needs_rebuild(const ParticleSet& p, bool requested = false) const;
+  /// particle moved more than half the skin since the last build_ghosts(); with `only`, a particle of that
+  /// kind (the caller reads no other ghosts until a renew without `only` checks every particle). Always false
+  /// on one rank unless requested. Collective: every rank gets the same answer.
+  bool needs_rebuild(const ParticleSet& p, bool requested = false, std::optional<ParticleKind> only = std::nullopt) const;
   /// Owners and ghosts ready for a module's next use: when needs_rebuild(p, requested), drops the ghosts,
   /// migrates, calls `before_ghosts` (e.g. a reorder of the owned particles) and builds the ghosts, and returns
-  /// true; otherwise refreshes `fields` of the ghosts (of kind `only`) and returns false. Collective.
+  /// true; otherwise refreshes `fields` of the ghosts (of kind `only`) and returns false. With `only`, only
+  /// the displacements of that kind count (needs_rebuild). Collective.
   bool renew(ParticleSet& p, const std::vector<std::string>& fields, std::optional<ParticleKind> only = std::nullopt,
              bool requested = false, const std::function<void()>& before_ghosts = {});
   /// Refreshes the named fields ("position", "velocity" or registered scalar / vector fields) of the

@@ -2,6 +2,8 @@
 // of (2 reach + 1)^d cells scanned row by row: the cells of a row along axis 0 are contiguous).
 #include "core/neighbours.hpp"
 
+#include "core/buffers.hpp"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -37,18 +39,18 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size) {
   if (dim > 2 && n_cells_.cast<double>().prod() > 2e9)
     throw std::runtime_error("CellGrid: particles spread over too many cells");
   cell_start_.assign(n_total + 1, 0);
-  cell_of_point_.resize(n);
+  resize_with_headroom(cell_of_point_, n);
   for (std::size_t i = 0; i < n; ++i) {
     const auto ci = static_cast<LocalIndex>(cell_index(cell_of(x[i])));
     cell_of_point_[i] = ci;
     ++cell_start_[static_cast<std::size_t>(ci) + 1];
   }
   for (std::size_t c = 0; c < n_total; ++c) cell_start_[c + 1] += cell_start_[c];
-  sorted_.resize(n);
+  resize_with_headroom(sorted_, n);
   // Stable counting sort: points keep increasing index order inside a cell.
   std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
   for (std::size_t i = 0; i < n; ++i) sorted_[fill[static_cast<std::size_t>(cell_of_point_[i])]++] = static_cast<LocalIndex>(i);
-  sorted_x_.resize(n);
+  resize_with_headroom(sorted_x_, n);
   for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[static_cast<std::size_t>(sorted_[k])];
 }
 

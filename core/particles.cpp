@@ -2,6 +2,7 @@
 #include "core/particles.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/buffers.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -175,7 +176,7 @@ void ParticleSet::unpack(const char* data, const std::size_t n) {
   for_each_array([&](auto& a) {
     using T = typename std::decay_t<decltype(a)>::value_type;
     const std::size_t old = a.size();
-    a.resize(old + n);
+    resize_with_headroom(a, old + n);
     const char* src = data + column;
     for (std::size_t k = 0; k < n; ++k, src += record) std::memcpy(static_cast<void*>(&a[old + k]), src, sizeof(T));
     column += sizeof(T);

@@ -10,6 +10,7 @@
 #include "fluid/fluid_solver.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/buffers.hpp"
 #include "core/distribution.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
@@ -190,7 +191,7 @@ struct FluidSolver::Impl {
     near.radius = re_g;
     near.support_only = true;
     near.offset.resize(n + 1);
-    near.index.resize(nl.n_pairs());  // an upper bound; trimmed below
+    resize_with_headroom(near.index, nl.n_pairs());  // an upper bound; trimmed below
     near.offset[0] = 0;
     std::size_t m = 0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -298,8 +299,8 @@ struct FluidSolver::Impl {
     // Upper bound of the entries: each row's neighbours plus its diagonal; trimmed at the end.
     std::size_t max_entries = 0;
     for (std::size_t r = 0; r < n_rows; ++r) max_entries += nl.count(static_cast<std::size_t>(particle_of_row[r])) + 1;
-    sys.col.resize(max_entries);
-    sys.value.resize(max_entries);
+    resize_with_headroom(sys.col, max_entries);
+    resize_with_headroom(sys.value, max_entries);
     std::size_t m = 0;  // entries written
     sys.row_ptr[0] = 0;
     const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);

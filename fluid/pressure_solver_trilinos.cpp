@@ -11,6 +11,7 @@
 #include "fluid/pressure_solver.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/buffers.hpp"
 #include "core/collectives.hpp"
 
 #include <Eigen/SparseCholesky>
@@ -326,10 +327,10 @@ class EisenstatSystem final : public OP {
       lower.ptr[i + 1] = lower.ptr[i] + static_cast<int>(d - b);
       other.ptr[i + 1] = other.ptr[i] + static_cast<int>(e - o);
     }
-    lower.col.resize(static_cast<std::size_t>(lower.ptr[n]));
-    lower.val.resize(lower.col.size());
-    other.col.resize(static_cast<std::size_t>(other.ptr[n]));
-    other.val.resize(other.col.size());
+    resize_with_headroom(lower.col, static_cast<std::size_t>(lower.ptr[n]));
+    resize_with_headroom(lower.val, lower.col.size());
+    resize_with_headroom(other.col, static_cast<std::size_t>(other.ptr[n]));
+    resize_with_headroom(other.val, other.col.size());
     diag.assign(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t k0 = sys.row_ptr[i], k1 = sys.row_ptr[i + 1];

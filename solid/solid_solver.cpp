@@ -797,8 +797,19 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     (*f_theta)[i] = (Rotation::from_vector(dt * (*f_omega)[i]) * Rotation((*f_theta)[i])).angle();  // eq. 46
     v2_max = std::max(v2_max, p.velocity[i].squaredNorm());
   }
-  allreduce(counts, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM);
-  allreduce(&v2_max, 1, MPI_DOUBLE, MPI_MAX);
+  // The step's totals in one collective (a sub-step does little work between its collectives): bonds broken
+  // and contacts summed, the largest speed.
+  if (n_ranks() > 1) {
+    const double mine[3] = {static_cast<double>(counts[0]), static_cast<double>(counts[1]), v2_max};
+    std::vector<double> all(3 * static_cast<std::size_t>(n_ranks()));
+    MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, comm);
+    counts[0] = counts[1] = 0;
+    for (std::size_t q = 0; q < all.size(); q += 3) {
+      counts[0] += static_cast<unsigned long long>(all[q]);
+      counts[1] += static_cast<unsigned long long>(all[q + 1]);
+      v2_max = std::max(v2_max, all[q + 2]);
+    }
+  }
   n_broken += counts[0];
   report.n_broken = n_broken;
   report.n_contacts = counts[1];

@@ -67,6 +67,14 @@ int main(int argc, char** argv) {
     getrusage(RUSAGE_SELF, &usage);
     // The slowest rank's phases, the largest peak memory; halo bytes and ghosts per rank and step (mean).
     double phases[7] = {sum.t_neighbours, sum.t_assembly, sum.t_setup, sum.t_solve, sum.t_halo, sum.t_rest, wall};
+    {  // each rank's phases (the balance of the work)
+      std::vector<double> all(7 * static_cast<std::size_t>(n_ranks));
+      MPI_Gather(phases, 7, MPI_DOUBLE, all.data(), 7, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+      for (std::size_t q = 0; rank == 0 && n_ranks > 1 && q < static_cast<std::size_t>(n_ranks); ++q)
+        fmt::print("rank {} ms/step: neighbours {:.2f}, assembly {:.2f}, setup {:.2f}, solve {:.2f}, halo {:.2f}, rest {:.2f}\n", q,
+                   all[7 * q] * 1e3 / n_steps, all[7 * q + 1] * 1e3 / n_steps, all[7 * q + 2] * 1e3 / n_steps,
+                   all[7 * q + 3] * 1e3 / n_steps, all[7 * q + 4] * 1e3 / n_steps, all[7 * q + 5] * 1e3 / n_steps);
+    }
     MPI_Allreduce(MPI_IN_PLACE, phases, 7, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
     long peak_kib = usage.ru_maxrss;
     MPI_Allreduce(MPI_IN_PLACE, &peak_kib, 1, MPI_LONG, MPI_MAX, MPI_COMM_WORLD);
