@@ -47,12 +47,14 @@ enum class Role : std::uint8_t {
 
 inline bool has_row(const Role r) { return r == Role::fluid || r == Role::boundary; }
 
-/// The cell of side h that holds x, as one key per cell (bits per axis: 62 / dim, cells counted from
-/// -2^(bits-1)).
-std::int64_t cell_key(const Vec& x, const Real h) {
-  constexpr int bits = 62 / dim;
+/// The coarse group of a particle: the cell of side h that holds x, cut by the ranks' regions (a group that
+/// straddles a cut is one group per owner: the deflation then also removes the error the block-Jacobi
+/// sweeps leave across the cut). One key per group: the owner in the top 20 bits, then 43 / dim bits per
+/// axis (cells counted from -2^(bits-1); cells further out share keys, which only merges groups).
+std::int64_t group_key(const Vec& x, const Real h, const int owner) {
+  constexpr int bits = 43 / dim;
   constexpr std::int64_t mask = (std::int64_t{1} << bits) - 1;
-  std::int64_t key = 0;
+  std::int64_t key = static_cast<std::int64_t>(owner) & ((std::int64_t{1} << 20) - 1);
   for (int a = 0; a < dim; ++a)
     key = (key << bits) | ((static_cast<std::int64_t>(std::floor(x[a] / h)) + (std::int64_t{1} << (bits - 1))) & mask);
   return key;
@@ -284,11 +286,11 @@ struct FluidSolver::Impl {
       }
     }
     sys.group.clear();
-    if (coarse_cell > 0) {  // the coarse groups: cells of side coarse_cell, the same on every rank
+    if (coarse_cell > 0) {  // the coarse groups: cells of side coarse_cell and owner, the same on every rank
       for (std::size_t r = 0; r < n_rows; ++r)
-        sys.group.push_back(cell_key(p.position[static_cast<std::size_t>(particle_of_row[r])], coarse_cell));
+        sys.group.push_back(group_key(p.position[static_cast<std::size_t>(particle_of_row[r])], coarse_cell, dist.rank()));
       for (std::size_t j = n_own; j < n; ++j)
-        if (row_of[j] >= 0) sys.group.push_back(cell_key(p.position[j], coarse_cell));
+        if (row_of[j] >= 0) sys.group.push_back(group_key(p.position[j], coarse_cell, dist.ghost_owner(j - n_own)));
     }
     // ||r||_2 <= eta rho / dt^2 sqrt(n_rows): RMS over the rows of r dt^2 / rho below eta.
     unsigned long long n_rows_global = n_rows;
