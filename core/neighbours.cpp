@@ -92,8 +92,8 @@ void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& part
   out.radius = radius;
   out.support_only = false;
   out.offset.resize(n + 1);
-  // Keep last step's capacity; the list length changes little from step to step.
-  out.index.resize(out.index.capacity());
+  // The index keeps last step's size (the list length changes little from step to step) and grows
+  // below when needed; it is not trimmed (n_pairs() = offset.back()).
   out.offset[0] = 0;
   const auto& sorted = grid.sorted();
   const auto& xs = grid.sorted_positions();
@@ -140,16 +140,16 @@ void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& part
     out.offset[q + 1] = n_pairs;
     if (sorted_lists) sort_short_list(out.index.data() + out.offset[q], n_pairs - out.offset[q]);
   }
-  out.index.resize(n_pairs);
 }
 
 }  // namespace
 
 void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
-                          const bool sorted_lists) {
+                          const bool sorted_lists, const std::optional<std::size_t> n_rows) {
   constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^d cells
+  assert(!n_rows || *n_rows <= x.size());
   grid.build(x, radius / reach);
-  fill_rows(x, x.size(), [](const std::size_t q) { return q; }, radius, reach, out, grid, sorted_lists);
+  fill_rows(x, n_rows.value_or(x.size()), [](const std::size_t q) { return q; }, radius, reach, out, grid, sorted_lists);
 }
 
 void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, const Real radius,

@@ -7,6 +7,7 @@
 
 #include "core/types.hpp"
 
+#include <optional>
 #include <vector>
 
 namespace mpsfsi {
@@ -22,7 +23,9 @@ struct NeighbourList {
   std::vector<LocalIndex> index;
 
   std::size_t n_particles() const { return offset.empty() ? 0 : offset.size() - 1; }
-  std::size_t n_pairs() const { return index.size(); }
+  /// Pairs in the rows. `index` may be longer: builders keep its size between steps (no zero-filling of a
+  /// list that grows again), so only the entries up to offset.back() belong to the rows.
+  std::size_t n_pairs() const { return offset.empty() ? 0 : offset.back(); }
   std::size_t begin(const std::size_t i) const { return offset[i]; }
   std::size_t end(const std::size_t i) const { return offset[i + 1]; }
   std::size_t count(const std::size_t i) const { return offset[i + 1] - offset[i]; }
@@ -81,8 +84,10 @@ class CellGrid {
 /// Cells of side radius / 2 and a stencil of 5^d cells: fewer candidates than 3^d cells of side radius.
 /// `grid` is reused between calls to avoid reallocation.
 /// With sorted = false each particle's neighbours come in cell order (a little faster).
+/// With n_rows, only the first n_rows points get rows (e.g. the owned particles: the ghosts are neighbours
+/// but need no list of their own); all points are candidates.
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid,
-                          bool sorted = true);
+                          bool sorted = true, std::optional<std::size_t> n_rows = std::nullopt);
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out);
 /// The neighbours of a few points only: row q of `out` lists every j != rows[q] with |x_j - x_rows[q]| <
 /// radius, in cell order (e.g. the solid surface particles whose fluid load is summed). Cells of side radius.

@@ -193,7 +193,8 @@ struct FluidSolver::Impl {
     near.radius = re_g;
     near.support_only = true;
     near.offset.resize(n + 1);
-    resize_with_headroom(near.index, nl.n_pairs());  // an upper bound; trimmed below
+    // An upper bound; not trimmed (n_pairs() = offset.back()), so that the next step need not zero-fill it.
+    if (near.index.size() < nl.n_pairs()) resize_with_headroom(near.index, nl.n_pairs());
     near.offset[0] = 0;
     std::size_t m = 0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -208,7 +209,6 @@ struct FluidSolver::Impl {
         }
       near.offset[i + 1] = m;
     }
-    near.index.resize(m);
   }
 
   /// Collision model (MPS-Basic collision()): approaching pairs closer than the collision distance
@@ -544,7 +544,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_rest += seconds_since(t0);
 
   t0 = Clock::now();
-  build_neighbour_list(m.p.position, m.r_max, m.nl, m.grid);
+  build_neighbour_list(m.p.position, m.r_max, m.nl, m.grid, true, m.p.n_owned());  // the ghosts need no rows
   report.t_neighbours += seconds_since(t0);
 
   t0 = Clock::now();
