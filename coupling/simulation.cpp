@@ -529,8 +529,8 @@ class RunLoop {
       logged_step_ = step_;
       jsonl_ << fmt::format(
           "{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\",\"ppe_iterations\":{},"
-          "\"ppe_residual\":{:.3g},\"subcycles\":{},\"wall\":{:.3f}}}\n",
-          step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.residual, summary_.last_subcycles, wall);
+          "\"ppe_solves\":{},\"ppe_residual\":{:.3g},\"subcycles\":{},\"wall\":{:.3f}}}\n",
+          step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.solves, last_fluid_.residual, summary_.last_subcycles, wall);
       jsonl_.flush();  // `tail -f run.jsonl` follows the run
       if (!jsonl_ && log_error_.empty()) log_error_ = "cannot write run log '" + settings_.output_dir + "/run.jsonl'";
     }

@@ -50,6 +50,20 @@ inline const NameTable<PressureGradient>& pressure_gradient_names() {
 }
 inline std::string_view to_string(const PressureGradient v) { return name_of(pressure_gradient_names(), v); }
 
+/// The pressure scheme. standard: the PPE with the Laplacian of eq. 12 and the gradient of `gradient` for the
+/// force. projection: the exact projection of the number density (docs/validation.md, ## Fluid): the force on
+/// particle k is -(1/rho)(d/C) sum_i p_i dn_i/dx_k (the constraint force of the density), and the PPE matrix
+/// is built from that same operator, (d/C) N N^T / n0 with N_ik = dn_i/dx_k, so that the correction removes
+/// kappa of each row's density error and a particle arrangement at rest has a force-free state; rows with
+/// a negative pressure become free-surface rows and compressed free-surface rows become rows again, until no
+/// row changes (a complementarity active set).
+enum class FluidScheme { standard, projection };
+inline const NameTable<FluidScheme>& fluid_scheme_names() {
+  static const NameTable<FluidScheme> t = {{"standard", FluidScheme::standard}, {"projection", FluidScheme::projection}};
+  return t;
+}
+inline std::string_view to_string(const FluidScheme v) { return name_of(fluid_scheme_names(), v); }
+
 /// Krylov solver of the pressure solve.
 enum class KrylovSolver { cg, gmres };
 inline const NameTable<KrylovSolver>& krylov_solver_names() {
@@ -87,6 +101,9 @@ struct FluidParameters {
   Real beta1 = 0.97;            ///< free surface: n_i < beta1 n0 ...
   Real beta2 = 0.85;            ///< ... and N_i < beta2 N0
   PressureGradient gradient = PressureGradient::min_pressure;
+  FluidScheme scheme = FluidScheme::standard;
+  /// projection: the most solves of one step while the active set changes.
+  int max_active_set_solves = 6;
   KrylovSolver solver = KrylovSolver::cg;
   /// Default ssor (Eisenstat SSOR, omega 1.4, with the coarse level of coarse_size): the fastest measured on
   /// the dam break (docs/performance.md, "Pressure solve" and "Parallel runs").

@@ -77,6 +77,8 @@ struct FluidSolver::Impl {
     beta1 = fluid.beta1;
     beta2 = fluid.beta2;
     corrected = fluid.gradient == PressureGradient::corrected;
+    projection = fluid.scheme == FluidScheme::projection;
+    max_active_set_solves = fluid.max_active_set_solves;
     gravity = setup.gravity;
     time = setup.time;
     // One fluid material: the PPE is written for one density.
@@ -189,7 +191,8 @@ struct FluidSolver::Impl {
 
   /// Pairs within re_g at the predicted positions (a filtered copy of the big list).
   void build_near_list() {
-    const std::size_t n = p.n_owned();
+    // The projection also needs the rows of the ghosts (their dn/dx in the pressure rows of their neighbours).
+    const std::size_t n = projection ? p.size() : p.n_owned();
     near.radius = re_g;
     near.support_only = true;
     near.offset.resize(n + 1);
@@ -244,6 +247,7 @@ struct FluidSolver::Impl {
   /// Eq. 8 at the predicted positions: n*, the neighbour count N, and the free-surface double check.
   void density_and_surface() {
     const std::size_t n = p.n_owned();
+    const bool warm_start = projection && n_steps > 0;
     n_star.resize(n);
     auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::vector<Real>* offset = nullptr;
@@ -255,7 +259,11 @@ struct FluidSolver::Impl {
       Real ni = d.n;
       if (offset && roles[i] == Role::boundary) ni += (*offset)[i];
       n_star[i] = ni;
-      surface[i] = has_row(roles[i]) && ni < beta1 * lat_g.n0 && d.count < beta2 * lat_g.n_neighbours ? 1.0 : 0.0;
+      const bool geometric = has_row(roles[i]) && ni < beta1 * lat_g.n0 && d.count < beta2 * lat_g.n_neighbours;
+      // The projection starts from the last step's active set (update_active_set), and the geometric test adds
+      // the particles that left the water.
+      const bool kept = warm_start && surface[i] != 0;
+      surface[i] = has_row(roles[i]) && (geometric || kept) ? 1.0 : 0.0;
     }
   }
 
@@ -298,6 +306,10 @@ struct FluidSolver::Impl {
     sys.absolute_tolerance = density_tolerance * rho / (dt * dt) * std::sqrt(static_cast<Real>(n_rows_global));
     sys.row_ptr.resize(n_rows + 1);
     sys.rhs.resize(n_rows);
+    if (projection) {
+      assemble_projection(dt);
+      return;
+    }
     // Upper bound of the entries: each row's neighbours plus its diagonal; trimmed at the end.
     std::size_t max_entries = 0;
     for (std::size_t r = 0; r < n_rows; ++r) max_entries += nl.count(static_cast<std::size_t>(particle_of_row[r])) + 1;
@@ -349,6 +361,188 @@ struct FluidSolver::Impl {
     sys.value.resize(m);
   }
 
+  // ---- the exact projection (fluid.scheme = projection; fluid/fluid_parameters.hpp) ----
+
+  /// dn_k/dx_k at every particle with a row in the near list (owned and ghosts), and the scale d / C of the
+  /// force, C the mean over the interior fluid particles of sum_j re / r_ij (n0 + N0 on the lattice), so that
+  /// -(d/C) N^T p is -grad p for a linear pressure on the current arrangement.
+  void projection_geometry() {
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const std::size_t n = near.n_particles();
+    const auto takes_part = [&](const std::size_t j) { return roles[j] != Role::none; };
+    // The near list holds the pairs within re_g of particles that take part (build_near_list): entry q of
+    // row k, neighbour j, gets dn_j/dx_k; by the symmetry of w, dn_k/dx_k is their sum.
+    dn_pair.resize(near.n_pairs());
+    dn_self.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec s = Vec::Zero();
+      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+        const Vec r_jk = p.position[k] - p.position[static_cast<std::size_t>(near.index[q])];
+        dn_pair[q] = density_derivative_pair(r_jk, r_jk.squaredNorm(), re_g);
+        s += dn_pair[q];
+      }
+      dn_self[k] = s;
+    }
+    Real sums[2] = {0, 0};  // sum over the interior fluid particles of sum_j re / r_ij, their count
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (roles[i] != Role::fluid || surface[i] != 0) continue;
+      for_each_pair(p.position, near, re_g, i, takes_part, [&](std::size_t, const Vec&, Real, const Real w) { sums[0] += w + 1; });
+      sums[1] += 1;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);
+    const Real c_sum = sums[1] > 0 ? sums[0] / sums[1] : lat_g.n0 + lat_g.n_neighbours;
+    projection_scale = dim / c_sum;
+  }
+
+  /// The projection's operator G = (d/C) N N^T / n0 over this rank's rows (every row particle, whatever its
+  /// free-surface flag), N_ik = dn_i/dx_k over the fluid particles k (the ones the force moves); built once per
+  /// step, after the rows are numbered (assemble), and filtered by the active set at each solve.
+  void build_gram() {
+    const std::size_t n_rows = particle_of_row.size();
+    const std::size_t n_columns = n_rows + sys.remote_id.size();
+    acc.assign(n_columns, 0.0);
+    touched_flag.assign(n_columns, 0);
+    touched.clear();
+    gram_ptr.assign(n_rows + 1, 0);
+    gram_col.clear();
+    gram_val.clear();
+    column_particle.assign(n_columns, 0);
+    for (std::size_t j = 0; j < p.size(); ++j)
+      if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
+    const Real scale = projection_scale / lat_g.n0;
+    const auto add = [&](const std::size_t j, const Real v) {
+      const auto col = static_cast<std::size_t>(row_of[j]);
+      if (!touched_flag[col]) {
+        touched_flag[col] = 1;
+        touched.push_back(static_cast<LocalIndex>(col));
+      }
+      acc[col] += v;
+    };
+    // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
+    // (dn_pair of row k's entries).
+    const auto visit_k = [&](const std::size_t k, const Vec& n_ik) {
+      if (has_row(roles[k])) add(k, n_ik.dot(dn_self[k]));
+      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+        const auto j = static_cast<std::size_t>(near.index[q]);
+        if (has_row(roles[j])) add(j, n_ik.dot(dn_pair[q]));
+      }
+    };
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (roles[i] == Role::fluid) visit_k(i, dn_self[i]);
+      // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k.
+      for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
+        const auto k = static_cast<std::size_t>(near.index[q]);
+        if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
+      }
+      if (!touched_flag[r]) {
+        touched_flag[r] = 1;
+        touched.push_back(static_cast<LocalIndex>(r));
+      }
+      std::sort(touched.begin(), touched.end());
+      for (const LocalIndex col : touched) {
+        const auto q = static_cast<std::size_t>(col);
+        gram_col.push_back(col);
+        gram_val.push_back(scale * acc[q]);
+        acc[q] = 0;
+        touched_flag[q] = 0;
+      }
+      touched.clear();
+      gram_ptr[r + 1] = gram_col.size();
+    }
+  }
+
+  /// The rows of the projection: G p + p / (c^2 dt^2) = kappa rho / dt^2 (n*_i - n0) / n0 (build_gram) over the
+  /// rows and columns that are not free surface; free-surface rows p = 0.
+  void assemble_projection(const Real dt) {
+    if (!gram_ready) {
+      build_gram();
+      gram_ready = true;
+    }
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const std::size_t n_rows = particle_of_row.size();
+    sys.col.clear();
+    sys.value.clear();
+    const Real compress = 1.0 / (c * c * dt * dt);
+    const Real source = kappa * rho / (dt * dt) / lat_g.n0;
+    projection_source = source;
+    const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + compress;
+    sys.row_ptr[0] = 0;
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (surface[i] != 0) {
+        sys.col.push_back(static_cast<LocalIndex>(r));
+        sys.value.push_back(dirichlet_diag);
+        sys.rhs[r] = 0;
+      } else {
+        for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
+          const auto q = static_cast<std::size_t>(gram_col[e]);
+          if (surface[static_cast<std::size_t>(column_particle[q])] != 0) continue;
+          sys.col.push_back(gram_col[e]);
+          sys.value.push_back(gram_val[e] + (q == r ? compress : 0.0));
+        }
+        sys.rhs[r] = source * (n_star[i] - lat_g.n0);
+      }
+      sys.row_ptr[r + 1] = sys.col.size();
+    }
+  }
+
+  /// The complementarity of the density constraint, p >= 0, w = A p - b >= 0, p w = 0 (a primal-dual active
+  /// set step): rows whose pressure came out negative become free-surface (p = 0) rows; free-surface rows whose
+  /// density the other rows' pressures do not bring down to n0 (w_i < 0, the particle would stay compressed)
+  /// become rows again, with `additions` only (the later updates of one time step only remove rows: the set
+  /// then shrinks and the iteration ends; a primal-dual active set can cycle when the matrix is not an
+  /// M-matrix, as this one is not). The pressures of the ghosts must be current. Whether any row changed on any rank.
+  bool update_active_set(const bool additions) {
+    auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const auto& pressure = p.scalar_field(fluid_fields::pressure);
+    const Real w_tolerance = 1e-9 * projection_source * lat_g.n0;  // a relative density change of 1e-9
+    int changed = 0;
+    for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (surface[i] == 0) {
+        if (x_own[r] < 0) {
+          surface[i] = 1;
+          changed = 1;
+        }
+        continue;
+      }
+      if (!additions) continue;
+      Real w = -projection_source * (n_star[i] - lat_g.n0);
+      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
+        w += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
+      if (w < -w_tolerance) {
+        surface[i] = 0;
+        changed = 1;
+      }
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_MAX, comm);
+    return changed != 0;
+  }
+
+  /// The projection's correction: v_k += -(dt/rho)(d/C) (p_k dn_k/dx_k + sum_j p_j dn_j/dx_k), r_k += dt dv_k,
+  /// for the fluid particles k (the transpose of the rows' operator).
+  void correct_projection(const Real dt) {
+    const auto& pressure = p.scalar_field(fluid_fields::pressure);
+    const std::size_t n = p.n_owned();
+    dv.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      dv[k].setZero();
+      if (roles[k] != Role::fluid) continue;
+      Vec f = pressure[k] * dn_self[k];
+      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+        const auto j = static_cast<std::size_t>(near.index[q]);
+        if (has_row(roles[j])) f += pressure[j] * dn_pair[q];
+      }
+      dv[k] = -dt / rho * projection_scale * f;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      if (roles[k] != Role::fluid) continue;
+      p.velocity[k] += dv[k];
+      p.position[k] += dt * dv[k];
+    }
+  }
+
   /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient.
   PressureSolveResult solve_pressure() {
     auto& pressure = p.scalar_field(fluid_fields::pressure);
@@ -371,6 +565,10 @@ struct FluidSolver::Impl {
   /// Eq. 19 and 24: v += -dt/rho grad P, r += dt (-dt/rho grad P). grad P by eq. 9 with p_min (every pair
   /// repels), or by the corrected gradient eq. 14-15 (falls back to p_min where the matrix is singular).
   void correct(const Real dt) {
+    if (projection) {
+      correct_projection(dt);
+      return;
+    }
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n = p.n_owned();
@@ -432,6 +630,10 @@ struct FluidSolver::Impl {
   LatticeConstants lat_g, lat_l;
   Real beta1 = 0, beta2 = 0;
   bool corrected = false;
+  bool projection = false;        ///< fluid.scheme = projection
+  int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
+  Real projection_scale = 0;      ///< d / C of the projection (projection_geometry)
+  Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
   Vec gravity = Vec::Zero();
   TimeSpec time;
   Rect domain;
@@ -457,6 +659,16 @@ struct FluidSolver::Impl {
   MPI_Comm comm = MPI_COMM_NULL;
   std::vector<Real> x_own;
   std::vector<std::uint8_t> remove;
+  std::vector<Vec> dn_self;              ///< projection: dn_k/dx_k
+  std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
+  std::vector<Real> acc;                 ///< projection: a row's entries by column while it is assembled
+  std::vector<std::uint8_t> touched_flag;
+  std::vector<LocalIndex> touched;
+  std::vector<std::size_t> gram_ptr;     ///< projection: the operator G of build_gram (CRS, sorted columns)
+  std::vector<LocalIndex> gram_col;
+  std::vector<Real> gram_val;
+  std::vector<LocalIndex> column_particle;  ///< projection: the particle of each column
+  bool gram_ready = false;                  ///< G built for this step
 };
 
 Real fluid_work_weight(const ParticleKind kind) {
@@ -466,7 +678,10 @@ Real fluid_work_weight(const ParticleKind kind) {
 }
 
 Real fluid_interaction_radius(const FluidSetup& setup) {
-  return std::max(setup.parameters.re_gradient, setup.parameters.re_laplacian) * setup.dp;
+  const FluidParameters& f = setup.parameters;
+  // The projection's rows couple particles that share a neighbour: 2 re_gradient apart.
+  const Real reach = f.scheme == FluidScheme::projection ? 2 * f.re_gradient : f.re_gradient;
+  return std::max(reach, f.re_laplacian) * setup.dp;
 }
 
 Real lateral_wall_friction_rate(const LateralWallFriction& walls, const Real nu) {
@@ -544,7 +759,8 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_rest += seconds_since(t0);
 
   t0 = Clock::now();
-  build_neighbour_list(m.p.position, m.r_max, m.nl, m.grid, true, m.p.n_owned());  // the ghosts need no rows
+  // The ghosts need no rows, but for the projection (projection_geometry).
+  build_neighbour_list(m.p.position, m.r_max, m.nl, m.grid, true, m.projection ? m.p.size() : m.p.n_owned());
   report.t_neighbours += seconds_since(t0);
 
   t0 = Clock::now();
@@ -564,6 +780,10 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   m.refresh_ghosts({fluid_fields::free_surface}, report);
 
   t0 = Clock::now();
+  if (m.projection) {
+    m.projection_geometry();
+    m.gram_ready = false;
+  }
   m.assemble(dt);
   report.t_assembly += seconds_since(t0);
   // A system with an overflow (rho / dt^2 for a vanishing dt, huge velocities) cannot be solved: say why
@@ -578,12 +798,28 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
         "is too small for double precision or the velocities overflowed; use a dt of at least ~1e-9 s (time.dt, "
         "time.dt_max) and check the run's earlier steps",
         dt, m.rho / (dt * dt)));
-  const PressureSolveResult res = m.solve_pressure();
-  m.refresh_ghosts({fluid_fields::pressure}, report);
+  PressureSolveResult res = m.solve_pressure();
   report.t_assembly += res.t_matrix;
   report.t_setup = res.t_setup;
   report.t_solve = res.t_solve;
   report.iterations = res.iterations;
+  // The projection's active set: re-solved while rows change (at most max_active_set_solves solves); rows
+  // come back in the first two updates only.
+  for (int solves = 1; m.projection && solves < m.max_active_set_solves; ++solves) {
+    m.refresh_ghosts({fluid_fields::pressure}, report);
+    if (!m.update_active_set(solves <= 2)) break;
+    m.refresh_ghosts({fluid_fields::free_surface}, report);
+    t0 = Clock::now();
+    m.assemble(dt);
+    report.t_assembly += seconds_since(t0);
+    res = m.solve_pressure();
+    report.t_assembly += res.t_matrix;
+    report.t_setup += res.t_setup;
+    report.t_solve += res.t_solve;
+    report.iterations += res.iterations;
+    ++report.solves;
+  }
+  m.refresh_ghosts({fluid_fields::pressure}, report);
   report.residual = res.residual;
   if (!res.converged)
     throw std::runtime_error(fmt::format(

@@ -22,7 +22,8 @@ class Distribution;
 /// What one fluid step did, for the log and the benchmarks.
 struct FluidStepReport {
   Real dt = 0;
-  int iterations = 0;          ///< pressure-solver iterations
+  int iterations = 0;          ///< pressure-solver iterations (of all solves)
+  int solves = 1;              ///< pressure solves (scheme projection: one per active set)
   Real residual = 0;           ///< achieved relative residual of the pressure solve
   std::size_t n_surface = 0;   ///< free-surface particles
   Real max_speed = 0;          ///< largest fluid particle speed after the step [m/s]

@@ -981,6 +981,13 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidParamet
   n.beta1 = r.number("beta1", n.beta1, in_half_open(0, 1), "a number in (0, 1] (free surface: n_i < beta1 n0)");
   n.beta2 = r.number("beta2", n.beta2, in_half_open(0, 1), "a number in (0, 1] (free surface: N_i < beta2 N0)");
   n.gradient = r.option("gradient", n.gradient, pressure_gradient_names());
+  n.scheme = r.option("scheme", n.scheme, fluid_scheme_names());
+  n.max_active_set_solves = r.integer("max_active_set_solves", n.max_active_set_solves,
+                                      [](const long long k) { return k >= 1 && k <= 100; },
+                                      "an integer in [1, 100] (scheme projection: the most pressure solves of one step)");
+  if (n.scheme == FluidScheme::projection && n.gradient == PressureGradient::corrected)
+    r.source().fail(r.at("gradient"), "fluid.gradient = corrected: expected min_pressure (the default) with fluid.scheme = "
+                                      "projection, which has its own pressure force");
   n.solver = r.option("solver", n.solver, krylov_solver_names());
   n.preconditioner = r.option("preconditioner", n.preconditioner, preconditioner_names());
   n.tolerance = r.number("tolerance", n.tolerance, in_open(0, 1), "a number in (0, 1) (relative residual of the pressure solve)");

@@ -246,3 +246,52 @@ TEST(Operators, IsolatedParticleHasZeroGradientAndDensity) {
   EXPECT_EQ(g[0].norm(), 0.0);
   EXPECT_TRUE(g[1].allFinite());
 }
+
+// The derivatives of the number density (the exact projection's operator): dn_i/dx_k and dn_i/dx_i against
+// central finite differences of eq. 8 on a jittered block, and dn_i/dx_i equal to the sum over the
+// neighbours j of dn_j/dx_i (the symmetry of w).
+TEST(Operators, DensityDerivativesMatchFiniteDifferences) {
+  const Real dp = 0.05, re = 2.1 * dp, h = 1e-7 * dp;
+  Block b = make_block(dp, re, 0.2, 3);
+  NeighbourList nl;
+  build_neighbour_list(b.x, re, nl);
+  const auto n_at = [&](std::vector<Vec>& x, const std::size_t i) {
+    Real n = 0;
+    for (std::size_t j = 0; j < x.size(); ++j)
+      if (j != i) n += weight((x[j] - x[i]).norm(), re);
+    return n;
+  };
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < b.x.size() && checked < 20; ++i) {
+    if (!b.interior[i]) continue;
+    ++checked;
+    const Vec self = density_derivative_self_at(b.x, nl, re, i);
+    Vec sum_of_pairs = Vec::Zero();
+    for (std::size_t q = nl.begin(i); q < nl.end(i); ++q) {
+      const auto j = static_cast<std::size_t>(nl.index[q]);
+      const Vec r_ji = b.x[i] - b.x[j];  // x_i - x_j: dn_j/dx_i
+      if (!in_support(r_ji.squaredNorm(), re)) continue;
+      sum_of_pairs += density_derivative_pair(r_ji, r_ji.squaredNorm(), re);
+    }
+    EXPECT_LT((self - sum_of_pairs).norm(), 1e-12 * self.norm() + 1e-9) << "particle " << i;
+    for (int a = 0; a < dim; ++a) {
+      std::vector<Vec> x = b.x;
+      x[i][a] += h;
+      const Real up = n_at(x, i);
+      x[i][a] -= 2 * h;
+      const Real down = n_at(x, i);
+      EXPECT_NEAR((up - down) / (2 * h), self[a], 1e-5 * (std::abs(self[a]) + 1 / dp)) << "particle " << i << " axis " << a;
+      // dn_i/dx_k for the first neighbour k of i.
+      const auto k = static_cast<std::size_t>(nl.index[nl.begin(i)]);
+      const Vec r_ik = b.x[k] - b.x[i];
+      const Vec pair = density_derivative_pair(r_ik, r_ik.squaredNorm(), re);
+      x = b.x;
+      x[k][a] += h;
+      const Real up_k = n_at(x, i);
+      x[k][a] -= 2 * h;
+      const Real down_k = n_at(x, i);
+      EXPECT_NEAR((up_k - down_k) / (2 * h), pair[a], 1e-5 * (std::abs(pair[a]) + 1 / dp)) << "particle " << i << " axis " << a;
+    }
+  }
+  EXPECT_EQ(checked, 20u);
+}
