@@ -251,7 +251,7 @@ TEST(Operators, IsolatedParticleHasZeroGradientAndDensity) {
 // central finite differences of eq. 8 on a jittered block, and dn_i/dx_i equal to the sum over the
 // neighbours j of dn_j/dx_i (the symmetry of w).
 TEST(Operators, DensityDerivativesMatchFiniteDifferences) {
-  const Real dp = 0.05, re = 2.1 * dp, h = 1e-7 * dp;
+  const Real dp = 0.02, re = 2.1 * dp, h = 1e-7 * dp;
   Block b = make_block(dp, re, 0.2, 3);
   NeighbourList nl;
   build_neighbour_list(b.x, re, nl);
