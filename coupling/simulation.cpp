@@ -141,6 +141,7 @@ class RunLoop {
       if (!jsonl_) throw std::runtime_error("cannot write " + settings.output_dir + "/run.jsonl");
     }
     next_output_ = spec.output.interval;
+    next_probe_ = spec.output.probe_interval.value_or(0);
     if (settings.restart) load_checkpoint(*settings.restart);
   }
 
@@ -150,6 +151,7 @@ class RunLoop {
     step_begin_ = step_;
     if (!settings_.restart) {
       write_output();
+      if (spec_.output.probe_interval) record_probes();
       receivers_.record_if_due(t_, p_, comm_);
     }
     report_projection();
@@ -162,16 +164,17 @@ class RunLoop {
       keep_last_good();
       step();
       receivers_.record_if_due(t_, p_, comm_);
+      if (spec_.output.probe_interval && t_ >= next_probe_ - eps) {
+        record_probes();
+        next_probe_ = next_after(next_probe_, *spec_.output.probe_interval, eps);
+      }
       report_progress(t_start, false);
       if (step_ - step_begin_ == 20) report_measured_projection(t_start);
       if (t_ >= next_output_ - eps) {
         write_output();
         // The next output time after t_: one addition as a rule (bit for bit the accumulated times), several
         // intervals at once when a step spans more than one.
-        const Real interval = spec_.output.interval;
-        const Real behind = std::floor((t_ + eps - next_output_) / interval) + 1;
-        next_output_ += behind > 1 ? behind * interval : interval;
-        if (!(next_output_ > t_ + eps)) next_output_ = t_ + interval;
+        next_output_ = next_after(next_output_, spec_.output.interval, eps);
       }
       if (every > 0 && t_ >= next_checkpoint - eps) {
         write_checkpoint_now();
@@ -463,13 +466,28 @@ class RunLoop {
                                  last_good_step_, frame));
   }
 
+  /// The next output time after t_ of a schedule due at `due`: one addition as a rule (bit for bit the
+  /// accumulated times), several intervals at once when a step spans more than one.
+  Real next_after(Real due, const Real interval, const Real eps) const {
+    const Real behind = std::floor((t_ + eps - due) / interval) + 1;
+    due += behind > 1 ? behind * interval : interval;
+    return due > t_ + eps ? due : t_ + interval;
+  }
+
+  /// A row of probes.csv at t_ (output.probe_interval; without it the rows come with the frames).
+  void record_probes() {
+    const std::vector<Real> values = probes_.evaluate(p_, t_, comm_);
+    on_rank0(comm_, [&] { probes_.record(t_, values); });
+  }
+
   /// A frame, the probes and the interface table at t_. A file that cannot be written (disk full) stops the
   /// run on every rank with OutputError; the series lists only the complete frames written before.
   void write_output() {
     const auto t0 = Clock::now();
     // The solid's derived fields and fragments.csv (written by rank 0 once every rank is past the collectives).
     if (solid_) on_every_rank(comm_, [&] { solid_->prepare_output(t_); });
-    const std::vector<Real> probe_values = probes_.evaluate(p_, t_, comm_);
+    const std::vector<Real> probe_values =
+        spec_.output.probe_interval ? std::vector<Real>{} : probes_.evaluate(p_, t_, comm_);
     try {
       // Every rank writes its piece; once all are complete, rank 0 adds the frame to the series.
       on_every_rank(comm_, [&] {
@@ -478,7 +496,7 @@ class RunLoop {
       });
       on_rank0(comm_, [&] {
         writer_.commit_frame(t_);
-        probes_.record(t_, probe_values);
+        if (!spec_.output.probe_interval) probes_.record(t_, probe_values);
         if (coupling_) coupling_->write_csv(t_);
       });
       if (rank_ != 0) writer_.commit_frame(t_);
@@ -581,6 +599,7 @@ class RunLoop {
     w.f64(dt_);
     w.string(limit_);
     w.f64(next_output_);
+    w.f64(next_probe_);
     w.u64(summary_.n_removed);
     w.u64(summary_.n_subcycles_raised);
     w.i64(summary_.last_subcycles);
@@ -664,6 +683,7 @@ class RunLoop {
       dt_ = in.f64("the time step");
       limit_ = in.string("the time-step limit");
       next_output_ = in.f64("the next output time");
+      next_probe_ = in.f64("the next probe time");
       summary_.n_removed = in.u64("the removed count");
       summary_.n_subcycles_raised = in.u64("the raised-subcycles count");
       summary_.last_subcycles = static_cast<int>(in.i64("the subcycles"));
@@ -767,6 +787,7 @@ class RunLoop {
   RunSummary summary_;
   Real t_ = 0, dt_ = 0;
   Real next_output_ = 0;               ///< time of the next frame (accumulated: saved, not recomputed)
+  Real next_probe_ = 0;                ///< time of the next row of probes.csv with output.probe_interval (likewise)
   std::string limit_ = "-";
   std::size_t step_ = 0;
   int n_ranks_ = 1;

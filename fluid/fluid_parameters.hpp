@@ -104,6 +104,9 @@ struct FluidParameters {
   FluidScheme scheme = FluidScheme::standard;
   /// projection: the most solves of one step while the active set changes.
   int max_active_set_solves = 6;
+  /// projection: the share alpha of the pressure stabilisation, the PPE matrix (1 - alpha) G + alpha s L_g
+  /// (L_g the Laplacian of eq. 12 at re_gradient, s its long-wave match to G). 0: the exact projection.
+  Real projection_stabilisation = 0.3;
   KrylovSolver solver = KrylovSolver::cg;
   /// Default ssor (Eisenstat SSOR, omega 1.4, with the coarse level of coarse_size): the fastest measured on
   /// the dam break (docs/performance.md, "Pressure solve" and "Parallel runs").

@@ -79,6 +79,7 @@ struct FluidSolver::Impl {
     corrected = fluid.gradient == PressureGradient::corrected;
     projection = fluid.scheme == FluidScheme::projection;
     max_active_set_solves = fluid.max_active_set_solves;
+    stabilisation = fluid.projection_stabilisation;
     gravity = setup.gravity;
     time = setup.time;
     // One fluid material: the PPE is written for one density.
@@ -394,13 +395,18 @@ struct FluidSolver::Impl {
     projection_scale = dim / c_sum;
   }
 
-  /// The projection's operator G = (d/C) N N^T / n0 over this rank's rows (every row particle, whatever its
-  /// free-surface flag), N_ik = dn_i/dx_k over the fluid particles k (the ones the force moves); built once per
-  /// step, after the rows are numbered (assemble), and filtered by the active set at each solve.
+  /// The projection's operator over this rank's rows (every row particle, whatever its free-surface flag),
+  /// (1 - alpha) G + alpha s L_g. G = (d/C) N N^T / n0, N_ik = dn_i/dx_k over the fluid particles k (the ones
+  /// the force moves). L_g is minus the Laplacian of eq. 12 at re_gradient over the row neighbours (pair
+  /// weights 2d w_ij / (lambda n0)), s = C / (d n0) its factor to G's long-wave limit, so that alpha changes
+  /// neither a smooth pressure nor the hydrostatic one in the bulk, and damps the oscillating pressures that G
+  /// alone leaves free (N^T p of a checkerboard p is nearly zero). Built once per step, after the rows are
+  /// numbered (assemble), and filtered by the active set at each solve.
   void build_gram() {
     const std::size_t n_rows = particle_of_row.size();
     const std::size_t n_columns = n_rows + sys.remote_id.size();
     acc.assign(n_columns, 0.0);
+    lap_acc.assign(n_columns, 0.0);
     touched_flag.assign(n_columns, 0);
     touched.clear();
     gram_ptr.assign(n_rows + 1, 0);
@@ -409,7 +415,8 @@ struct FluidSolver::Impl {
     column_particle.assign(n_columns, 0);
     for (std::size_t j = 0; j < p.size(); ++j)
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
-    const Real scale = projection_scale / lat_g.n0;
+    const Real scale = (1.0 - stabilisation) * projection_scale / lat_g.n0;
+    const Real lap_scale = stabilisation / (projection_scale * lat_g.n0) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
     const auto add = [&](const std::size_t j, const Real v) {
       const auto col = static_cast<std::size_t>(row_of[j]);
       if (!touched_flag[col]) {
@@ -417,6 +424,10 @@ struct FluidSolver::Impl {
         touched.push_back(static_cast<LocalIndex>(col));
       }
       acc[col] += v;
+    };
+    const auto add_laplacian = [&](const std::size_t j, const Real v) {
+      add(j, 0.0);
+      lap_acc[static_cast<std::size_t>(row_of[j])] += v;
     };
     // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
     // (dn_pair of row k's entries).
@@ -435,6 +446,14 @@ struct FluidSolver::Impl {
         const auto k = static_cast<std::size_t>(near.index[q]);
         if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
       }
+      if (stabilisation > 0)
+        for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
+          const auto j = static_cast<std::size_t>(near.index[q]);
+          if (!has_row(roles[j])) continue;
+          const Real v = lap_scale * weight((p.position[j] - p.position[i]).norm(), re_g);
+          add_laplacian(j, -v);
+          add_laplacian(i, v);
+        }
       if (!touched_flag[r]) {
         touched_flag[r] = 1;
         touched.push_back(static_cast<LocalIndex>(r));
@@ -443,8 +462,9 @@ struct FluidSolver::Impl {
       for (const LocalIndex col : touched) {
         const auto q = static_cast<std::size_t>(col);
         gram_col.push_back(col);
-        gram_val.push_back(scale * acc[q]);
+        gram_val.push_back(scale * acc[q] + lap_acc[q]);
         acc[q] = 0;
+        lap_acc[q] = 0;
         touched_flag[q] = 0;
       }
       touched.clear();
@@ -632,6 +652,7 @@ struct FluidSolver::Impl {
   bool corrected = false;
   bool projection = false;        ///< fluid.scheme = projection
   int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
+  Real stabilisation = 0;         ///< alpha of fluid.projection_stabilisation
   Real projection_scale = 0;      ///< d / C of the projection (projection_geometry)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
   Vec gravity = Vec::Zero();
@@ -661,7 +682,8 @@ struct FluidSolver::Impl {
   std::vector<std::uint8_t> remove;
   std::vector<Vec> dn_self;              ///< projection: dn_k/dx_k
   std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
-  std::vector<Real> acc;                 ///< projection: a row's entries by column while it is assembled
+  std::vector<Real> acc;                 ///< projection: a row's entries by column while it is assembled (G ...
+  std::vector<Real> lap_acc;             ///< ... and the stabilisation)
   std::vector<std::uint8_t> touched_flag;
   std::vector<LocalIndex> touched;
   std::vector<std::size_t> gram_ptr;     ///< projection: the operator G of build_gram (CRS, sorted columns)

@@ -94,6 +94,7 @@ struct ReceiversSpec {
 
 struct OutputSpec {
   Real interval = 0.01;         ///< simulated time between frames [s]
+  std::optional<Real> probe_interval;  ///< simulated time between rows of probes.csv [s]; none: with each frame
   std::vector<std::string> fields;  ///< empty: every field
 };
 

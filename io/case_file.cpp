@@ -985,6 +985,9 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidParamet
   n.max_active_set_solves = r.integer("max_active_set_solves", n.max_active_set_solves,
                                       [](const long long k) { return k >= 1 && k <= 100; },
                                       "an integer in [1, 100] (scheme projection: the most pressure solves of one step)");
+  n.projection_stabilisation =
+      r.number("projection_stabilisation", n.projection_stabilisation, [](Real x) { return x >= 0 && x <= 1; },
+               "a number in [0, 1] (scheme projection: the share of the Laplacian in the pressure matrix)");
   if (n.scheme == FluidScheme::projection && n.gradient == PressureGradient::corrected)
     r.source().fail(r.at("gradient"), "fluid.gradient = corrected: expected min_pressure (the default) with fluid.scheme = "
                                       "projection, which has its own pressure force");
@@ -1209,6 +1212,8 @@ void read_receivers(MapReader r, CaseSpec& spec) {
 void read_output(MapReader r, const Real end, OutputSpec& out) {
   out.interval = r.number("interval", out.interval, positive, "a positive number (simulated time between frames) [s]");
   check_interval(r, "interval", out.interval, r.has("interval"), end, "frames");
+  out.probe_interval = r.optional_number("probe_interval", positive, "a positive number (simulated time between rows of probes.csv) [s]");
+  if (out.probe_interval) check_interval(r, "probe_interval", *out.probe_interval, true, end, "probe rows");
   std::set<std::string> seen;
   for (const Field& f : r.list("fields", "a list of field names, e.g. [pressure, velocity]", false)) {
     const std::string name = to_name(r.source(), f, "a field name (" + name_form + ")");
@@ -1257,7 +1262,7 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   read_sources(top, base_dir, spec);
   read_probes(top, spec);
   read_receivers(top.optional_map("receivers", "a map {interval, radius, points: [{name, body, position}, ...]}"), spec);
-  read_output(top.optional_map("output", "a map {interval, fields}"), spec.time.end, spec.output);
+  read_output(top.optional_map("output", "a map {interval, probe_interval, fields}"), spec.time.end, spec.output);
   top.finish();
   return spec;
 }

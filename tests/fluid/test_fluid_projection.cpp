@@ -27,7 +27,25 @@ CaseSpec closed_box_case() {
                    {"dp=0.01", "fluid.scheme=projection", "gravity=[0,0]", "materials.water.nu=0",
                     "materials.water.kappa=1", "materials.water.c=1e5", "fluid.tolerance=1e-12",
                     "fluid.density_tolerance=0", "walls.box.open_top=false", "walls.box.rectangle.max=[0.2,0.21]",
-                    "fluid.max_active_set_solves=20"});
+                    "fluid.max_active_set_solves=20", "fluid.projection_stabilisation=0"});
+}
+
+/// The pressure system of the first solve of still water on the lattice (no gravity, one solve: the active
+/// set is not updated) with the given share of the stabilisation.
+LocalRows first_system(const Real alpha, std::vector<Vec>* positions = nullptr, std::vector<LocalIndex>* rows = nullptr,
+                       std::vector<Real>* surface = nullptr) {
+  const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/hydrostatic.yaml",
+                                  {"dp=0.01", "fluid.scheme=projection", "gravity=[0,0]", "materials.water.nu=0",
+                                   "materials.water.c=1e5", "fluid.max_active_set_solves=1",
+                                   "fluid.projection_stabilisation=" + std::to_string(alpha)});
+  Scene scene = build_scene(spec);
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), scene.particles, dist};
+  fluid.advance(0.0, 1e-3);
+  if (positions) *positions = scene.particles.position;
+  if (rows) *rows = fluid.row_particles();
+  if (surface) *surface = scene.particles.scalar_field("free_surface");
+  return fluid.last_system();
 }
 
 Real entry(const LocalRows& s, const std::size_t row, const LocalIndex col) {
@@ -123,6 +141,52 @@ TEST(Projection, RemovesTheDensityErrorAndKeepsComplementarity) {
   // two updates).
   EXPECT_LT(error_pressed, 0.045 * error_before) << error_pressed / n0 << " vs " << error_before / n0;
   EXPECT_LT(excess_free, 0.4 * error_before) << excess_free / n0 << " vs " << error_before / n0;
+}
+
+// The stabilised matrix is (1 - alpha) G + alpha s L_g: linear in alpha, and at alpha = 1 an interior row is the
+// Laplacian of eq. 12 at re_gradient times s = C / (d n0), C the mean of sum_j re / r_ij over the fluid
+// particles off the free surface.
+TEST(Projection, StabilisationIsTheScaledLaplacian) {
+  std::vector<Vec> x;
+  std::vector<LocalIndex> rows;
+  std::vector<Real> surface;
+  const LocalRows a0 = first_system(0.0), a1 = first_system(1.0, &x, &rows, &surface), a03 = first_system(0.3);
+  ASSERT_EQ(a0.n_rows(), a1.n_rows());
+  ASSERT_EQ(a0.n_rows(), a03.n_rows());
+  const Real dp = 0.01, re = 2.1 * dp, dt = 1e-3, compress = 1.0 / (1e5 * 1e5 * dt * dt);
+  const LatticeConstants lat = lattice_constants(dp, re);
+  Real c_sum = 0, n_interior = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (surface[i] != 0 || !(x[i][1] > 0 && x[i][0] > 0 && x[i][0] < 0.2)) continue;  // fluid: inside the box
+    for (std::size_t j = 0; j < x.size(); ++j)
+      if (j != i && in_support((x[j] - x[i]).squaredNorm(), re)) c_sum += re / (x[j] - x[i]).norm();
+    n_interior += 1;
+  }
+  const Real s = c_sum / n_interior / (dim * lat.n0), a = 2.0 * dim / (lat.lambda * lat.n0);
+  std::size_t n_checked = 0;
+  for (std::size_t r = 0; r < a1.n_rows(); ++r) {
+    for (std::size_t k = a03.row_ptr[r]; k < a03.row_ptr[r + 1]; ++k) {
+      const Real v0 = entry(a0, r, a03.col[k]), v1 = entry(a1, r, a03.col[k]);
+      EXPECT_NEAR(a03.value[k], 0.7 * v0 + 0.3 * v1, 1e-12 * (std::abs(v0) + std::abs(v1))) << r;
+    }
+    // An interior row: 3 dp from the walls and the surface.
+    const Vec& xi = x[static_cast<std::size_t>(rows[r])];
+    if (!(xi[0] > 0.03 && xi[0] < 0.17 && xi[1] > 0.03 && xi[1] < 0.17)) continue;
+    Real diag = compress;
+    std::size_t n_off = 0;
+    for (std::size_t k = a1.row_ptr[r]; k < a1.row_ptr[r + 1]; ++k) {
+      const auto c = static_cast<std::size_t>(a1.col[k]);
+      if (c == r) continue;
+      const Real w = weight((x[static_cast<std::size_t>(rows[c])] - xi).norm(), re);
+      EXPECT_NEAR(a1.value[k], -s * a * w, 1e-12 * s * a * lat.n0) << r << "," << c;
+      diag += s * a * w;
+      n_off += w > 0;
+    }
+    EXPECT_EQ(n_off, static_cast<std::size_t>(lat.n_neighbours));
+    EXPECT_NEAR(entry(a1, r, static_cast<LocalIndex>(r)), diag, 1e-12 * diag);
+    ++n_checked;
+  }
+  EXPECT_GT(n_checked, 100u);
 }
 
 TEST(Projection, RejectsTheCorrectedGradient) {
