@@ -29,4 +29,33 @@ struct LatticeConstants {
 
 LatticeConstants lattice_constants(Real dp, Real re);
 
+/// The kernel of a number density n_i = sum_j w(r_ij): the MPS weight (eq. 7), or Wendland's C2 kernel
+/// w(r) = (1 - q)^4 (1 + 4 q), q = r / re (Wendland 1995, docs/references.md), which is smooth at r = 0 and
+/// at re. The exact projection's pair forces (p_i + p_j) w'(r) e_ij leave the square lattice under pressure
+/// without shear stiffness with the MPS weight (columns sliding past each other lower the energy), and
+/// with a small positive one with Wendland's (docs/validation.md, ## Fluid).
+enum class DensityKernel : std::uint8_t { mps, wendland };
+
+/// w(r) and dw/dr of a kernel, zero outside the support.
+struct KernelValue {
+  Real w = 0;
+  Real dw = 0;
+};
+
+inline KernelValue kernel_at(const DensityKernel k, const Real r, const Real re) {
+  if (!in_support(r * r, re)) return {};
+  if (k == DensityKernel::mps) return {re / r - 1.0, -re / (r * r)};
+  const Real q = r / re, a = 1.0 - q, a3 = a * a * a;
+  return {a3 * a * (1.0 + 4.0 * q), -20.0 * q * a3 / re};
+}
+
+/// Sums of a kernel over the lattice of lattice_constants (square in 2D, simple cubic in 3D), at an interior
+/// particle: n0 = sum_j w(r_j), and c = sum_j -w'(r_j) r_j (the scale of the pair forces' gradient: for a linear
+/// p, sum_j (p_i + p_j) w'(r_ij) e_ij = -(c / d) grad p; n0 + N0 for the MPS weight).
+struct KernelSums {
+  Real n0 = 0;
+  Real c = 0;
+};
+KernelSums lattice_sums(DensityKernel k, Real dp, Real re);
+
 }  // namespace mpsfsi

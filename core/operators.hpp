@@ -69,19 +69,23 @@ inline DensityAndCount number_density_at(const std::vector<Vec>& x, const Neighb
   return d;
 }
 
-/// The derivative of n_i (eq. 8) with respect to the position of a neighbour k at r_ik = x_k - x_i inside the
-/// support (|r_ik|^2 = r2): dn_i/dx_k = w'(r) r_ik / r = -re r_ik / r^3.
-inline Vec density_derivative_pair(const Vec& r_ik, const Real r2, const Real re) {
-  return (-re / (r2 * std::sqrt(r2))) * r_ik;
+/// The derivative of n_i (eq. 8, with the kernel k) with respect to the position of a neighbour k at
+/// r_ik = x_k - x_i inside the support (|r_ik|^2 = r2): dn_i/dx_k = w'(r) r_ik / r (-re r_ik / r^3 for the MPS
+/// weight).
+inline Vec density_derivative_pair(const Vec& r_ik, const Real r2, const Real re,
+                                   const DensityKernel kernel = DensityKernel::mps) {
+  const Real r = std::sqrt(r2);
+  return (kernel_at(kernel, r, re).dw / r) * r_ik;
 }
 
 /// dn_i/dx_i = -sum_k dn_i/dx_k over the neighbours k of i that `accept` (eq. 8 moved with particle i).
 template <class Accept = AllNeighbours>
 inline Vec density_derivative_self_at(const std::vector<Vec>& x, const NeighbourList& nl, const Real re,
-                                      const std::size_t i, Accept&& accept = {}) {
+                                      const std::size_t i, Accept&& accept = {},
+                                      const DensityKernel kernel = DensityKernel::mps) {
   Vec s = Vec::Zero();
   for_each_pair(x, nl, re, i, accept, [&](std::size_t, const Vec& rij, const Real r2, Real) {
-    s -= density_derivative_pair(rij, r2, re);
+    s -= density_derivative_pair(rij, r2, re, kernel);
   });
   return s;
 }

@@ -5,6 +5,7 @@
 
 #include "core/enum_names.hpp"
 #include "core/geometry.hpp"
+#include "core/kernel.hpp"
 #include "core/tank_motion.hpp"
 #include "core/time_spec.hpp"
 #include "core/types.hpp"
@@ -64,6 +65,13 @@ inline const NameTable<FluidScheme>& fluid_scheme_names() {
 }
 inline std::string_view to_string(const FluidScheme v) { return name_of(fluid_scheme_names(), v); }
 
+/// The number-density kernel of the projection (core/kernel.hpp).
+inline const NameTable<DensityKernel>& density_kernel_names() {
+  static const NameTable<DensityKernel> t = {{"mps", DensityKernel::mps}, {"wendland", DensityKernel::wendland}};
+  return t;
+}
+inline std::string_view to_string(const DensityKernel v) { return name_of(density_kernel_names(), v); }
+
 /// Krylov solver of the pressure solve.
 enum class KrylovSolver { cg, gmres };
 inline const NameTable<KrylovSolver>& krylov_solver_names() {
@@ -106,7 +114,9 @@ struct FluidParameters {
   int max_active_set_solves = 6;
   /// projection: the share alpha of the pressure stabilisation, the PPE matrix (1 - alpha) G + alpha s L_g
   /// (L_g the Laplacian of eq. 12 at re_gradient, s its long-wave match to G). 0: the exact projection.
-  Real projection_stabilisation = 0.3;
+  Real projection_stabilisation = 0.6;
+  /// projection: the kernel of the number density that the projection constrains (radius re_gradient).
+  DensityKernel projection_kernel = DensityKernel::wendland;
   KrylovSolver solver = KrylovSolver::cg;
   /// Default ssor (Eisenstat SSOR, omega 1.4, with the coarse level of coarse_size): the fastest measured on
   /// the dam break (docs/performance.md, "Pressure solve" and "Parallel runs").

@@ -80,6 +80,10 @@ struct FluidSolver::Impl {
     projection = fluid.scheme == FluidScheme::projection;
     max_active_set_solves = fluid.max_active_set_solves;
     stabilisation = fluid.projection_stabilisation;
+    kernel = fluid.projection_kernel;
+    const KernelSums sums = lattice_sums(kernel, dp, re_g);
+    n0_kernel = sums.n0;
+    c_lattice = sums.c;
     gravity = setup.gravity;
     time = setup.time;
     // One fluid material: the PPE is written for one density.
@@ -120,6 +124,7 @@ struct FluidSolver::Impl {
 
     p.add_scalar_field(fluid_fields::pressure, 0.0);
     p.add_scalar_field(fluid_fields::free_surface, 0.0);
+    if (projection) p.add_scalar_field(reference_density_field, 0.0);
     if (motion.moving() && !p.has_vector_field(wall_reference_field)) {
       auto& reference = p.add_vector_field(wall_reference_field);
       for (std::size_t i = 0; i < p.size(); ++i) reference[i] = p.position[i];
@@ -128,6 +133,21 @@ struct FluidSolver::Impl {
 
   /// The particle field that holds each wall particle's position in the tank's rest frame (moving tanks).
   static constexpr const char* wall_reference_field = "wall_reference";
+  /// The projection: each dummy particle's number density in the initial state (its wall group's reference).
+  static constexpr const char* reference_density_field = "reference_density";
+
+  /// The projection, first step: the reference densities of the dummy particles, at the initial positions.
+  void reference_densities() {
+    auto& reference = p.scalar_field(reference_density_field);
+    const auto takes_part = [&](const std::size_t j) { return roles[j] != Role::none; };
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (p.kind[i] != ParticleKind::dummy) continue;
+      Real n_i = 0;
+      for_each_pair(p.position, nl, re_g, i, takes_part,
+                    [&](std::size_t, const Vec&, const Real r2, Real) { n_i += kernel_at(kernel, std::sqrt(r2), re_g).w; });
+      reference[i] = n_i;
+    }
+  }
 
   Role role(const ParticleKind k) const {
     switch (k) {
@@ -364,35 +384,82 @@ struct FluidSolver::Impl {
 
   // ---- the exact projection (fluid.scheme = projection; fluid/fluid_parameters.hpp) ----
 
-  /// dn_k/dx_k at every particle with a row in the near list (owned and ghosts), and the scale d / C of the
-  /// force, C the mean over the interior fluid particles of sum_j re / r_ij (n0 + N0 on the lattice), so that
-  /// -(d/C) N^T p is -grad p for a linear pressure on the current arrangement.
+  /// dn_k/dx_k at every particle with a row in the near list (owned and ghosts), with the projection's kernel,
+  /// and the scale d / C of the force, C the mean over the interior fluid particles of sum_j -w'(r_ij) r_ij
+  /// (sum_j re / r_ij = n0 + N0 on the lattice for the MPS weight), so that -(d/C) N^T p is -grad p for a
+  /// linear pressure on the current arrangement.
   void projection_geometry() {
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n = near.n_particles();
-    const auto takes_part = [&](const std::size_t j) { return roles[j] != Role::none; };
     // The near list holds the pairs within re_g of particles that take part (build_near_list): entry q of
     // row k, neighbour j, gets dn_j/dx_k; by the symmetry of w, dn_k/dx_k is their sum.
+    // Also the kernel's number density n_k and sum_j -w'(r_jk) r_jk (C of the particle).
     dn_pair.resize(near.n_pairs());
     dn_self.resize(n);
+    n_kernel.resize(n);
+    c_of.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
       Vec s = Vec::Zero();
+      Real n_k = 0, c_k = 0;
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
         const Vec r_jk = p.position[k] - p.position[static_cast<std::size_t>(near.index[q])];
-        dn_pair[q] = density_derivative_pair(r_jk, r_jk.squaredNorm(), re_g);
+        const Real r = r_jk.norm();
+        const KernelValue kv = kernel_at(kernel, r, re_g);
+        dn_pair[q] = (kv.dw / r) * r_jk;
         s += dn_pair[q];
+        n_k += kv.w;
+        c_k -= kv.dw * r;
       }
       dn_self[k] = s;
+      n_kernel[k] = n_k;
+      c_of[k] = c_k;
     }
-    Real sums[2] = {0, 0};  // sum over the interior fluid particles of sum_j re / r_ij, their count
+    Real sums[2] = {0, 0};  // sum over the interior fluid particles of sum_j -w'(r_ij) r_ij, their count
     for (std::size_t i = 0; i < p.n_owned(); ++i) {
       if (roles[i] != Role::fluid || surface[i] != 0) continue;
-      for_each_pair(p.position, near, re_g, i, takes_part, [&](std::size_t, const Vec&, Real, const Real w) { sums[0] += w + 1; });
+      sums[0] += c_of[i];
       sums[1] += 1;
     }
     MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);
-    const Real c_sum = sums[1] > 0 ? sums[0] / sums[1] : lat_g.n0 + lat_g.n_neighbours;
+    const Real c_sum = sums[1] > 0 ? sums[0] / sums[1] : c_lattice;
     projection_scale = dim / c_sum;
+    wall_groups();
+  }
+
+  /// The wall groups: each dummy particle within re_g of a wall particle joins the group of the nearest one
+  /// (ties to the smaller global id, so that every rank that holds both decides alike). A group shares the
+  /// wall particle's pressure unknown: the dummies carry its pressure in the force, and the group's row
+  /// constrains the sum of its members' number densities (each against its initial value). Without it the
+  /// dummies push with p = 0, and water at rest on the lattice feels a net force of up to 2.3 g toward the
+  /// walls (docs/validation.md, ## Fluid).
+  void wall_groups() {
+    const std::size_t n = near.n_particles();
+    parent_of.assign(n, -1);
+    group_error.assign(n, 0.0);
+    const auto& reference = p.scalar_field(reference_density_field);
+    for (std::size_t m = 0; m < n; ++m) {
+      if (p.kind[m] != ParticleKind::dummy || roles[m] != Role::dummy) continue;
+      Real best = std::numeric_limits<Real>::max();
+      GlobalId best_id = 0;
+      for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
+        const auto j = static_cast<std::size_t>(near.index[q]);
+        const Real r2 = (p.position[j] - p.position[m]).squaredNorm();
+        if (p.kind[j] != ParticleKind::wall || roles[j] != Role::boundary) continue;
+        if (r2 < best * (1 - 1e-12) || (r2 <= best * (1 + 1e-12) && p.global_id[j] < best_id)) {
+          best = r2;
+          best_id = p.global_id[j];
+          parent_of[m] = static_cast<LocalIndex>(j);
+        }
+      }
+      if (parent_of[m] >= 0) group_error[m] = n_kernel[m] - reference[m];
+    }
+  }
+
+  /// The pressure unknown (local column) of particle j: its own row, its wall group's, or none (-1).
+  LocalIndex column_of(const std::size_t j) const {
+    if (row_of[j] >= 0) return row_of[j];
+    if (j < parent_of.size() && parent_of[j] >= 0) return row_of[static_cast<std::size_t>(parent_of[j])];
+    return -1;
   }
 
   /// The projection's operator over this rank's rows (every row particle, whatever its free-surface flag),
@@ -415,44 +482,75 @@ struct FluidSolver::Impl {
     column_particle.assign(n_columns, 0);
     for (std::size_t j = 0; j < p.size(); ++j)
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
-    const Real scale = (1.0 - stabilisation) * projection_scale / lat_g.n0;
-    const Real lap_scale = stabilisation / (projection_scale * lat_g.n0) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
-    const auto add = [&](const std::size_t j, const Real v) {
-      const auto col = static_cast<std::size_t>(row_of[j]);
+    const Real scale = (1.0 - stabilisation) * projection_scale / n0_kernel;
+    const Real lap_scale = stabilisation / (projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
+    const auto add_column = [&](const std::size_t col, const Real v) {
       if (!touched_flag[col]) {
         touched_flag[col] = 1;
         touched.push_back(static_cast<LocalIndex>(col));
       }
       acc[col] += v;
     };
-    const auto add_laplacian = [&](const std::size_t j, const Real v) {
-      add(j, 0.0);
-      lap_acc[static_cast<std::size_t>(row_of[j])] += v;
+    const auto add = [&](const std::size_t j, const Real v) { add_column(static_cast<std::size_t>(row_of[j]), v); };
+    const auto add_laplacian_column = [&](const std::size_t col, const Real v) {
+      add_column(col, 0.0);
+      lap_acc[col] += v;
     };
     // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
     // (dn_pair of row k's entries).
     const auto visit_k = [&](const std::size_t k, const Vec& n_ik) {
       if (has_row(roles[k])) add(k, n_ik.dot(dn_self[k]));
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
-        const auto j = static_cast<std::size_t>(near.index[q]);
-        if (has_row(roles[j])) add(j, n_ik.dot(dn_pair[q]));
+        const LocalIndex col = column_of(static_cast<std::size_t>(near.index[q]));
+        if (col >= 0) add_column(static_cast<std::size_t>(col), n_ik.dot(dn_pair[q]));
       }
     };
+    // The members of each row's wall group (dummies whose parent is the row's particle).
+    member_ptr.assign(n_rows + 1, 0);
+    for (std::size_t m = 0; m < parent_of.size(); ++m)
+      if (parent_of[m] >= 0 && static_cast<std::size_t>(parent_of[m]) < p.n_owned())
+        ++member_ptr[static_cast<std::size_t>(row_of[static_cast<std::size_t>(parent_of[m])]) + 1];
+    for (std::size_t r = 0; r < n_rows; ++r) member_ptr[r + 1] += member_ptr[r];
+    members.resize(member_ptr[n_rows]);
+    {
+      std::vector<std::size_t> fill(member_ptr.begin(), member_ptr.end() - 1);
+      for (std::size_t m = 0; m < parent_of.size(); ++m)
+        if (parent_of[m] >= 0 && static_cast<std::size_t>(parent_of[m]) < p.n_owned())
+          members[fill[static_cast<std::size_t>(row_of[static_cast<std::size_t>(parent_of[m])])]++] = static_cast<LocalIndex>(m);
+    }
+    // Each row's density error: its particle's against n0, plus its group's dummies' against their references.
+    row_error.resize(n_rows);
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      row_error[r] = n_kernel[static_cast<std::size_t>(particle_of_row[r])] - n0_kernel;
+      for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) row_error[r] += group_error[static_cast<std::size_t>(members[e])];
+    }
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (roles[i] == Role::fluid) visit_k(i, dn_self[i]);
-      // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k.
+      // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
       for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
         const auto k = static_cast<std::size_t>(near.index[q]);
         if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
       }
+      for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) {
+        const auto m = static_cast<std::size_t>(members[e]);
+        for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
+          const auto k = static_cast<std::size_t>(near.index[q]);
+          if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
+        }
+      }
       if (stabilisation > 0)
-        for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
-          const auto j = static_cast<std::size_t>(near.index[q]);
-          if (!has_row(roles[j])) continue;
-          const Real v = lap_scale * weight((p.position[j] - p.position[i]).norm(), re_g);
-          add_laplacian(j, -v);
-          add_laplacian(i, v);
+        // The pairs of the row's group (its particle and its dummies) with the other groups' particles.
+        for (std::size_t e = member_ptr[r]; e <= member_ptr[r + 1]; ++e) {
+          const std::size_t a = e < member_ptr[r + 1] ? static_cast<std::size_t>(members[e]) : i;
+          for (std::size_t q = near.begin(a); q < near.end(a); ++q) {
+            const auto j = static_cast<std::size_t>(near.index[q]);
+            const LocalIndex col = column_of(j);
+            if (col < 0 || static_cast<std::size_t>(col) == r) continue;
+            const Real v = lap_scale * weight((p.position[j] - p.position[a]).norm(), re_g);
+            add_laplacian_column(static_cast<std::size_t>(col), -v);
+            add_laplacian_column(r, v);
+          }
         }
       if (!touched_flag[r]) {
         touched_flag[r] = 1;
@@ -484,7 +582,7 @@ struct FluidSolver::Impl {
     sys.col.clear();
     sys.value.clear();
     const Real compress = 1.0 / (c * c * dt * dt);
-    const Real source = kappa * rho / (dt * dt) / lat_g.n0;
+    const Real source = kappa * rho / (dt * dt) / n0_kernel;
     projection_source = source;
     const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + compress;
     sys.row_ptr[0] = 0;
@@ -501,7 +599,7 @@ struct FluidSolver::Impl {
           sys.col.push_back(gram_col[e]);
           sys.value.push_back(gram_val[e] + (q == r ? compress : 0.0));
         }
-        sys.rhs[r] = source * (n_star[i] - lat_g.n0);
+        sys.rhs[r] = source * row_error[r];
       }
       sys.row_ptr[r + 1] = sys.col.size();
     }
@@ -516,7 +614,7 @@ struct FluidSolver::Impl {
   bool update_active_set(const bool additions) {
     auto& surface = p.scalar_field(fluid_fields::free_surface);
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
-    const Real w_tolerance = 1e-9 * projection_source * lat_g.n0;  // a relative density change of 1e-9
+    const Real w_tolerance = 1e-9 * projection_source * n0_kernel;  // a relative density change of 1e-9
     int changed = 0;
     for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
@@ -528,7 +626,7 @@ struct FluidSolver::Impl {
         continue;
       }
       if (!additions) continue;
-      Real w = -projection_source * (n_star[i] - lat_g.n0);
+      Real w = -projection_source * row_error[r];
       for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
         w += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
       if (w < -w_tolerance) {
@@ -553,6 +651,7 @@ struct FluidSolver::Impl {
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
         const auto j = static_cast<std::size_t>(near.index[q]);
         if (has_row(roles[j])) f += pressure[j] * dn_pair[q];
+        else if (parent_of[j] >= 0) f += pressure[static_cast<std::size_t>(parent_of[j])] * dn_pair[q];
       }
       dv[k] = -dt / rho * projection_scale * f;
     }
@@ -653,6 +752,9 @@ struct FluidSolver::Impl {
   bool projection = false;        ///< fluid.scheme = projection
   int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
   Real stabilisation = 0;         ///< alpha of fluid.projection_stabilisation
+  DensityKernel kernel = DensityKernel::wendland;  ///< fluid.projection_kernel
+  Real n0_kernel = 0;             ///< n0 of that kernel at re_gradient
+  Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
   Real projection_scale = 0;      ///< d / C of the projection (projection_geometry)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
   Vec gravity = Vec::Zero();
@@ -682,6 +784,12 @@ struct FluidSolver::Impl {
   std::vector<std::uint8_t> remove;
   std::vector<Vec> dn_self;              ///< projection: dn_k/dx_k
   std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
+  std::vector<Real> n_kernel, c_of;      ///< projection: each particle's kernel density, sum_j -w' r
+  std::vector<LocalIndex> parent_of;     ///< projection: the wall particle whose group a dummy joins, or -1
+  std::vector<Real> group_error;         ///< projection: a group dummy's density minus its reference
+  std::vector<std::size_t> member_ptr;   ///< projection: each row's group dummies (CSR)
+  std::vector<LocalIndex> members;
+  std::vector<Real> row_error;           ///< projection: each row's density error (with its group's)
   std::vector<Real> acc;                 ///< projection: a row's entries by column while it is assembled (G ...
   std::vector<Real> lap_acc;             ///< ... and the stabilisation)
   std::vector<std::uint8_t> touched_flag;
@@ -786,6 +894,10 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_neighbours += seconds_since(t0);
 
   t0 = Clock::now();
+  if (m.projection && m.n_steps == 0) {
+    m.reference_densities();
+    m.refresh_ghosts({Impl::reference_density_field}, report);
+  }
   m.predict(dt);
   report.t_rest += seconds_since(t0);
   m.refresh_ghosts({"position", "velocity"}, report);

@@ -104,3 +104,41 @@ TEST(Kernel, InteriorParticleMatchesLatticeConstants) {
     EXPECT_EQ(count[centre], c.n_neighbours);
   }
 }
+
+// Wendland's C2 kernel (the projection's density): w = (1 - q)^4 (1 + 4 q), 1 at r -> 0, 0 from re on, w'
+// against central differences; the lattice sums: for the MPS weight n0 of lattice_constants and c = n0 + N0
+// (-w' r = re / r = w + 1), for Wendland's against the direct sum.
+TEST(Kernel, WendlandAndLatticeSums) {
+  const Real re = 0.021;
+  EXPECT_NEAR(kernel_at(DensityKernel::wendland, 1e-9 * re, re).w, 1.0, 1e-7);
+  EXPECT_EQ(kernel_at(DensityKernel::wendland, re, re).w, 0.0);
+  EXPECT_EQ(kernel_at(DensityKernel::wendland, 1.5 * re, re).dw, 0.0);
+  for (const Real q : {0.1, 0.37, 0.5, 0.81, 0.99}) {
+    const Real r = q * re, h = 1e-7 * re;
+    EXPECT_NEAR(kernel_at(DensityKernel::wendland, r, re).w, std::pow(1 - q, 4) * (1 + 4 * q), 1e-15) << q;
+    for (const DensityKernel k : {DensityKernel::mps, DensityKernel::wendland}) {
+      const Real fd = (kernel_at(k, r + h, re).w - kernel_at(k, r - h, re).w) / (2 * h);
+      EXPECT_NEAR(kernel_at(k, r, re).dw, fd, 1e-6 * std::abs(fd) + 1e-9 / re) << q;
+    }
+  }
+  const Real dp = 0.01;
+  for (const Real factor : {2.1, 4.0}) {
+    const LatticeConstants c = lattice_constants(dp, factor * dp);
+    const KernelSums mps = lattice_sums(DensityKernel::mps, dp, factor * dp);
+    EXPECT_NEAR(mps.n0, c.n0, 1e-12 * c.n0);
+    EXPECT_NEAR(mps.c, c.n0 + c.n_neighbours, 1e-12 * mps.c);
+    const KernelSums w = lattice_sums(DensityKernel::wendland, dp, factor * dp);
+    Real n0 = 0, sum_c = 0;
+    const int m = 5, kmax = dim == 3 ? m : 0;
+    for (int i = -m; i <= m; ++i)
+      for (int j = -m; j <= m; ++j)
+        for (int k = -kmax; k <= kmax; ++k) {
+          const Real r = dp * std::sqrt(Real(i * i + j * j + k * k)), q = r / (factor * dp);
+          if (r == 0 || q >= 1) continue;
+          n0 += std::pow(1 - q, 4) * (1 + 4 * q);
+          sum_c += 20 * q * q * std::pow(1 - q, 3);  // -w'(r) r
+        }
+    EXPECT_NEAR(w.n0, n0, 1e-12 * n0) << factor;
+    EXPECT_NEAR(w.c, sum_c, 1e-12 * sum_c) << factor;
+  }
+}

@@ -247,10 +247,13 @@ TEST(Operators, IsolatedParticleHasZeroGradientAndDensity) {
   EXPECT_TRUE(g[1].allFinite());
 }
 
-// The derivatives of the number density (the exact projection's operator): dn_i/dx_k and dn_i/dx_i against
-// central finite differences of eq. 8 on a jittered block, and dn_i/dx_i equal to the sum over the
-// neighbours j of dn_j/dx_i (the symmetry of w).
-TEST(Operators, DensityDerivativesMatchFiniteDifferences) {
+// The derivatives of the number density (the exact projection's operator), for both kernels: dn_i/dx_k and
+// dn_i/dx_i against central finite differences of eq. 8 on a jittered block, and dn_i/dx_i equal to the sum
+// over the neighbours j of dn_j/dx_i (the symmetry of w).
+class DensityDerivatives : public ::testing::TestWithParam<DensityKernel> {};
+
+TEST_P(DensityDerivatives, MatchFiniteDifferences) {
+  const DensityKernel kernel = GetParam();
   const Real dp = 0.02, re = 2.1 * dp, h = 1e-7 * dp;
   Block b = make_block(dp, re, 0.2, 3);
   NeighbourList nl;
@@ -258,20 +261,20 @@ TEST(Operators, DensityDerivativesMatchFiniteDifferences) {
   const auto n_at = [&](std::vector<Vec>& x, const std::size_t i) {
     Real n = 0;
     for (std::size_t j = 0; j < x.size(); ++j)
-      if (j != i) n += weight((x[j] - x[i]).norm(), re);
+      if (j != i) n += kernel_at(kernel, (x[j] - x[i]).norm(), re).w;
     return n;
   };
   std::size_t checked = 0;
   for (std::size_t i = 0; i < b.x.size() && checked < 20; ++i) {
     if (!b.interior[i]) continue;
     ++checked;
-    const Vec self = density_derivative_self_at(b.x, nl, re, i);
+    const Vec self = density_derivative_self_at(b.x, nl, re, i, AllNeighbours{}, kernel);
     Vec sum_of_pairs = Vec::Zero();
     for (std::size_t q = nl.begin(i); q < nl.end(i); ++q) {
       const auto j = static_cast<std::size_t>(nl.index[q]);
       const Vec r_ji = b.x[i] - b.x[j];  // x_i - x_j: dn_j/dx_i
       if (!in_support(r_ji.squaredNorm(), re)) continue;
-      sum_of_pairs += density_derivative_pair(r_ji, r_ji.squaredNorm(), re);
+      sum_of_pairs += density_derivative_pair(r_ji, r_ji.squaredNorm(), re, kernel);
     }
     EXPECT_LT((self - sum_of_pairs).norm(), 1e-12 * self.norm() + 1e-9) << "particle " << i;
     for (int a = 0; a < dim; ++a) {
@@ -284,7 +287,7 @@ TEST(Operators, DensityDerivativesMatchFiniteDifferences) {
       // dn_i/dx_k for the first neighbour k of i.
       const auto k = static_cast<std::size_t>(nl.index[nl.begin(i)]);
       const Vec r_ik = b.x[k] - b.x[i];
-      const Vec pair = density_derivative_pair(r_ik, r_ik.squaredNorm(), re);
+      const Vec pair = density_derivative_pair(r_ik, r_ik.squaredNorm(), re, kernel);
       x = b.x;
       x[k][a] += h;
       const Real up_k = n_at(x, i);
@@ -295,3 +298,5 @@ TEST(Operators, DensityDerivativesMatchFiniteDifferences) {
   }
   EXPECT_EQ(checked, 20u);
 }
+
+INSTANTIATE_TEST_SUITE_P(Operators, DensityDerivatives, ::testing::Values(DensityKernel::mps, DensityKernel::wendland));
