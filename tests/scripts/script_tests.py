@@ -1,4 +1,5 @@
-"""Driver of the ctest tests of scripts/plot_probes.py and scripts/render.py (see tests/scripts/CMakeLists.txt)."""
+"""Driver of the ctest tests of scripts/plot_probes.py, scripts/render.py and cases/dam_break_lobovsky/analyse.py
+(see tests/scripts/CMakeLists.txt)."""
 import os
 import shutil
 import struct
@@ -137,6 +138,47 @@ def test_render_no_display(python, script, work):
     print("OK")
 
 
+def test_lobovsky(python, script, work):
+    """analyse.py on probes.csv files made from known signals: the experiment's own record in the program's
+    units (the same figures as the experiment's row), and a step with a 1 kHz ripple of amplitude 0.1 rho g H
+    (noise figure 0.1 / sqrt(2): the 5 ms average spans five periods)."""
+    import math
+
+    os.makedirs(work, exist_ok=True)
+    H, rho, g = 0.3, 1000.0, 9.81
+    record = os.path.join(os.path.dirname(script), "lobovsky_2014_h300_event5.csv")
+    rows = [line.split(",") for line in open(record) if line[0].isdigit()]
+    same = os.path.join(work, "same.csv")
+    with open(same, "w") as f:
+        f.write("time,front,p1,p2,p3,p4\n")
+        for r in rows:
+            t = float(r[0]) / math.sqrt(g / H)
+            f.write(f"{t!r},0," + ",".join(repr(float(v) * rho * g * H) for v in r[1:5]) + "\n")
+    ripple = os.path.join(work, "ripple.csv")
+    with open(ripple, "w") as f:
+        f.write("time,front,p1,p2,p3,p4\n")
+        for k in range(15000):
+            t = k * 1e-4
+            p = (1.0 + 0.1 * math.sin(2 * math.pi * 1000 * t + 0.3)) if t * math.sqrt(g / H) > 1.5 else 0.0
+            f.write(f"{t!r},0," + ",".join([repr(p * rho * g * H)] * 4) + "\n")
+    rc, out = run([python, script, same, ripple, "--label", "same", "ripple"])
+    if rc != 0:
+        fail(f"exit code {rc}")
+    lines = [line for line in out.splitlines() if line.startswith("| ")]
+    experiment = [line.split("|")[2:] for line in lines if line.startswith("| experiment")]
+    copy = [line.split("|")[2:] for line in lines if line.startswith("| same")]
+    if len(experiment) != 4 or experiment != copy:
+        fail(f"the record in the program's units does not give the experiment's figures: {experiment} vs {copy}")
+    for line in (line for line in lines if line.startswith("| ripple")):
+        cells = [c.strip() for c in line.split("|")]
+        noise = float(cells[-2])
+        if abs(noise - 0.1 / math.sqrt(2)) > 0.002:
+            fail(f"ripple noise {noise}, expected {0.1 / math.sqrt(2):.4f}")
+        if abs(float(cells[3]) - 1.1) > 0.002:
+            fail(f"ripple first peak {cells[3]}, expected 1.1")
+    print("OK")
+
+
 if __name__ == "__main__":
     what = sys.argv[1]
     if what == "plot":
@@ -145,5 +187,7 @@ if __name__ == "__main__":
         test_render(*sys.argv[2:7])
     elif what == "render-no-display":
         test_render_no_display(*sys.argv[2:5])
+    elif what == "lobovsky":
+        test_lobovsky(*sys.argv[2:5])
     else:
         fail(f"unknown test {what}")
