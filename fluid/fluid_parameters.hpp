@@ -113,10 +113,12 @@ struct FluidParameters {
   /// projection: the most solves of one step while the active set changes.
   int max_active_set_solves = 6;
   /// projection: the share alpha of the pressure stabilisation, the PPE matrix (1 - alpha) G + alpha s L_g
-  /// (L_g the Laplacian of eq. 12 at re_gradient, s its long-wave match to G). 0: the exact projection.
-  Real projection_stabilisation = 0.6;
-  /// projection: the kernel of the number density that the projection constrains (radius re_gradient).
+  /// (L_g the Laplacian of eq. 12 at re_gradient, s its long-wave match to G). 0: the exact projection; 1 (the
+  /// default): the scaled Laplacian alone, whose G is then built in the first step only (start_from_rest).
+  Real projection_stabilisation = 1.0;
+  /// projection: the kernel of the number density that the projection constrains, and its radius in dp.
   DensityKernel projection_kernel = DensityKernel::wendland;
+  Real projection_radius = 2.0;
   KrylovSolver solver = KrylovSolver::cg;
   /// Default ssor (Eisenstat SSOR, omega 1.4, with the coarse level of coarse_size): the fastest measured on
   /// the dam break (docs/performance.md, "Pressure solve" and "Parallel runs").

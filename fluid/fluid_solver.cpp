@@ -81,7 +81,9 @@ struct FluidSolver::Impl {
     max_active_set_solves = fluid.max_active_set_solves;
     stabilisation = fluid.projection_stabilisation;
     kernel = fluid.projection_kernel;
-    const KernelSums sums = lattice_sums(kernel, dp, re_g);
+    re_p = fluid.projection_radius * dp;
+    if (projection) r_max = std::max(r_max, re_p);
+    const KernelSums sums = lattice_sums(kernel, dp, re_p);
     n0_kernel = sums.n0;
     c_lattice = sums.c;
     gravity = setup.gravity;
@@ -124,7 +126,10 @@ struct FluidSolver::Impl {
 
     p.add_scalar_field(fluid_fields::pressure, 0.0);
     p.add_scalar_field(fluid_fields::free_surface, 0.0);
-    if (projection) p.add_scalar_field(reference_density_field, 0.0);
+    if (projection) {
+      p.add_scalar_field(reference_density_field, 0.0);
+      p.add_scalar_field(rest_offset_field, 0.0);
+    }
     if (motion.moving() && !p.has_vector_field(wall_reference_field)) {
       auto& reference = p.add_vector_field(wall_reference_field);
       for (std::size_t i = 0; i < p.size(); ++i) reference[i] = p.position[i];
@@ -135,6 +140,9 @@ struct FluidSolver::Impl {
   static constexpr const char* wall_reference_field = "wall_reference";
   /// The projection: each dummy particle's number density in the initial state (its wall group's reference).
   static constexpr const char* reference_density_field = "reference_density";
+  /// The projection: each row particle's number density offset that makes the initial state the scheme's
+  /// equilibrium under the initial pressure (start_from_rest).
+  static constexpr const char* rest_offset_field = "rest_offset";
 
   /// The projection, first step: the reference densities of the dummy particles, at the initial positions.
   void reference_densities() {
@@ -143,8 +151,8 @@ struct FluidSolver::Impl {
     for (std::size_t i = 0; i < p.n_owned(); ++i) {
       if (p.kind[i] != ParticleKind::dummy) continue;
       Real n_i = 0;
-      for_each_pair(p.position, nl, re_g, i, takes_part,
-                    [&](std::size_t, const Vec&, const Real r2, Real) { n_i += kernel_at(kernel, std::sqrt(r2), re_g).w; });
+      for_each_pair(p.position, nl, re_p, i, takes_part,
+                    [&](std::size_t, const Vec&, const Real r2, Real) { n_i += kernel_at(kernel, std::sqrt(r2), re_p).w; });
       reference[i] = n_i;
     }
   }
@@ -214,7 +222,8 @@ struct FluidSolver::Impl {
   void build_near_list() {
     // The projection also needs the rows of the ghosts (their dn/dx in the pressure rows of their neighbours).
     const std::size_t n = projection ? p.size() : p.n_owned();
-    near.radius = re_g;
+    // The projection's kernel may reach further than re_g (fluid.projection_radius).
+    near.radius = projection ? std::max(re_g, re_p) : re_g;
     near.support_only = true;
     near.offset.resize(n + 1);
     // An upper bound; not trimmed (n_pairs() = offset.back()), so that the next step need not zero-fill it.
@@ -227,7 +236,7 @@ struct FluidSolver::Impl {
         for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
           const LocalIndex j = nl.index[k];
           const bool keep = roles[static_cast<std::size_t>(j)] != Role::none &&
-                            in_support((p.position[static_cast<std::size_t>(j)] - xi).squaredNorm(), re_g);
+                            in_support((p.position[static_cast<std::size_t>(j)] - xi).squaredNorm(), near.radius);
           near.index[m] = j;  // branch-free append
           m += keep;
         }
@@ -404,7 +413,7 @@ struct FluidSolver::Impl {
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
         const Vec r_jk = p.position[k] - p.position[static_cast<std::size_t>(near.index[q])];
         const Real r = r_jk.norm();
-        const KernelValue kv = kernel_at(kernel, r, re_g);
+        const KernelValue kv = kernel_at(kernel, r, re_p);
         dn_pair[q] = (kv.dw / r) * r_jk;
         s += dn_pair[q];
         n_k += kv.w;
@@ -424,6 +433,7 @@ struct FluidSolver::Impl {
     const Real c_sum = sums[1] > 0 ? sums[0] / sums[1] : c_lattice;
     projection_scale = dim / c_sum;
     wall_groups();
+    surface_pressures();
   }
 
   /// The wall groups: each dummy particle within re_g of a wall particle joins the group of the nearest one
@@ -471,6 +481,7 @@ struct FluidSolver::Impl {
   /// numbered (assemble), and filtered by the active set at each solve.
   void build_gram() {
     const std::size_t n_rows = particle_of_row.size();
+    const auto& rest_offset = p.scalar_field(rest_offset_field);
     const std::size_t n_columns = n_rows + sys.remote_id.size();
     acc.assign(n_columns, 0.0);
     lap_acc.assign(n_columns, 0.0);
@@ -482,8 +493,8 @@ struct FluidSolver::Impl {
     column_particle.assign(n_columns, 0);
     for (std::size_t j = 0; j < p.size(); ++j)
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
-    const Real scale = (1.0 - stabilisation) * projection_scale / n0_kernel;
-    const Real lap_scale = stabilisation / (projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
+    const Real scale = (1.0 - step_alpha) * projection_scale / n0_kernel;
+    const Real lap_scale = step_alpha / (projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
     const auto add_column = [&](const std::size_t col, const Real v) {
       if (!touched_flag[col]) {
         touched_flag[col] = 1;
@@ -521,12 +532,14 @@ struct FluidSolver::Impl {
     // Each row's density error: its particle's against n0, plus its group's dummies' against their references.
     row_error.resize(n_rows);
     for (std::size_t r = 0; r < n_rows; ++r) {
-      row_error[r] = n_kernel[static_cast<std::size_t>(particle_of_row[r])] - n0_kernel;
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      row_error[r] = n_kernel[i] - n0_kernel + rest_offset[i];
       for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) row_error[r] += group_error[static_cast<std::size_t>(members[e])];
     }
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      if (roles[i] == Role::fluid) visit_k(i, dn_self[i]);
+      if (step_alpha < 1) {  // G (at alpha = 1 the matrix is the scaled Laplacian alone)
+        if (roles[i] == Role::fluid) visit_k(i, dn_self[i]);
       // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
       for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
         const auto k = static_cast<std::size_t>(near.index[q]);
@@ -539,7 +552,8 @@ struct FluidSolver::Impl {
           if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
         }
       }
-      if (stabilisation > 0)
+      }
+      if (step_alpha > 0)
         // The pairs of the row's group (its particle and its dummies) with the other groups' particles.
         for (std::size_t e = member_ptr[r]; e <= member_ptr[r + 1]; ++e) {
           const std::size_t a = e < member_ptr[r + 1] ? static_cast<std::size_t>(members[e]) : i;
@@ -581,8 +595,9 @@ struct FluidSolver::Impl {
     const std::size_t n_rows = particle_of_row.size();
     sys.col.clear();
     sys.value.clear();
-    const Real compress = 1.0 / (c * c * dt * dt);
-    const Real source = kappa * rho / (dt * dt) / n0_kernel;
+    // The first step solves for the incompressible pressure (kappa 1, the compressibility 1e-4 of the case's).
+    const Real compress = (initial_step ? 1e-4 : 1.0) / (c * c * dt * dt);
+    const Real source = (initial_step ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
     projection_source = source;
     const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + compress;
     sys.row_ptr[0] = 0;
@@ -591,15 +606,19 @@ struct FluidSolver::Impl {
       if (surface[i] != 0) {
         sys.col.push_back(static_cast<LocalIndex>(r));
         sys.value.push_back(dirichlet_diag);
-        sys.rhs[r] = 0;
+        sys.rhs[r] = dirichlet_diag * surface_pressure[i];
       } else {
+        sys.rhs[r] = source * row_error[r];
         for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
           const auto q = static_cast<std::size_t>(gram_col[e]);
-          if (surface[static_cast<std::size_t>(column_particle[q])] != 0) continue;
+          const auto j = static_cast<std::size_t>(column_particle[q]);
+          if (surface[j] != 0) {
+            sys.rhs[r] -= gram_val[e] * surface_pressure[j];
+            continue;
+          }
           sys.col.push_back(gram_col[e]);
           sys.value.push_back(gram_val[e] + (q == r ? compress : 0.0));
         }
-        sys.rhs[r] = source * row_error[r];
       }
       sys.row_ptr[r + 1] = sys.col.size();
     }
@@ -638,6 +657,29 @@ struct FluidSolver::Impl {
     return changed != 0;
   }
 
+  /// The start from rest (the projection's first step, whose system is the incompressible one: kappa 1, no
+  /// compressibility, stabilisation start_alpha): its pressure p0 holds the fluid. Each row then gets the offset o that makes p0 the
+  /// solution of the scheme's own system in the state the step leaves, (G' + eps) p0 = kappa S (b + o) with
+  /// b the row's density error and S = rho / (dt^2 n0): o = b (1/kappa - 1) + (eps - eps0) p0 / (kappa S).
+  /// So the fluid starts in its discrete equilibrium, compressed as the weak compressibility wants it,
+  /// instead of having to compress and ring first (docs/validation.md, ## Fluid).
+  void start_from_rest(const Real dt) {
+    step_alpha = stabilisation;
+    build_gram();  // G' of the later steps
+    auto& rest_offset = p.scalar_field(rest_offset_field);
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const auto& pressure = p.scalar_field(fluid_fields::pressure);  // p0, current at the ghosts
+    const Real eps = 1.0 / (c * c * dt * dt), s = kappa * rho / (dt * dt) / n0_kernel;
+    for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (surface[i] != 0) continue;
+      Real a_p = eps * pressure[i];  // (G' p0 + eps p0)_r, free-surface columns at their pressure
+      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
+        a_p += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
+      rest_offset[i] = a_p / s - row_error[r];
+    }
+  }
+
   /// The projection's correction: v_k += -(dt/rho)(d/C) (p_k dn_k/dx_k + sum_j p_j dn_j/dx_k), r_k += dt dv_k,
   /// for the fluid particles k (the transpose of the rows' operator).
   void correct_projection(const Real dt) {
@@ -662,6 +704,22 @@ struct FluidSolver::Impl {
     }
   }
 
+  /// The pressure a free-surface row holds: 0, or with the projection the hydrostatic pressure at a fluid
+  /// particle's centre, half a spacing below the surface, rho dp / 2 max(0, -g . n) with n the outward normal
+  /// -dn_k/dx_k / |dn_k/dx_k| (rho g dp / 2 on a level surface, 0 on a vertical one).
+  Real surface_value(const std::size_t i) const { return projection ? surface_pressure[i] : 0.0; }
+
+  /// The projection: surface_value of every particle in the near list (owned and ghosts).
+  void surface_pressures() {
+    const std::size_t n = near.n_particles();
+    surface_pressure.assign(n, 0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Real norm = dn_self[k].norm();
+      if (roles[k] != Role::fluid || !(norm > 0)) continue;
+      surface_pressure[k] = 0.5 * rho * dp * std::max(0.0, gravity.dot(dn_self[k]) / norm);
+    }
+  }
+
   /// Solve, then p = 0 on the free surface; negative pressures clipped for the min-pressure gradient.
   PressureSolveResult solve_pressure() {
     auto& pressure = p.scalar_field(fluid_fields::pressure);
@@ -670,13 +728,13 @@ struct FluidSolver::Impl {
     x_own.resize(n_rows);
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      x_own[r] = surface[i] != 0 ? 0.0 : pressure[i];  // warm start
+      x_own[r] = surface[i] != 0 ? surface_value(i) : pressure[i];  // warm start
     }
     const PressureSolveResult res = solver->solve(sys, x_own);
     std::fill(pressure.begin(), pressure.end(), 0.0);
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      pressure[i] = surface[i] != 0 ? 0.0 : std::max(x_own[r], 0.0);
+      pressure[i] = surface[i] != 0 ? surface_value(i) : std::max(x_own[r], 0.0);
     }
     return res;
   }
@@ -746,10 +804,17 @@ struct FluidSolver::Impl {
   TankMotion motion;
   int rank = 0;
   Real dp = 0, re_g = 0, re_l = 0, r_max = 0;
+  Real re_p = 0;  ///< radius of the projection's density kernel (fluid.projection_radius)
   LatticeConstants lat_g, lat_l;
   Real beta1 = 0, beta2 = 0;
   bool corrected = false;
   bool projection = false;        ///< fluid.scheme = projection
+  bool initial_step = false;      ///< the projection's first step (start_from_rest)
+  Real step_alpha = 0;            ///< the stabilisation of this step's matrix: start_alpha in the first step, else alpha
+  /// The first step's stabilisation: nearly the exact projection, whose pressure balances gravity in the
+  /// force's own terms, with enough of the Laplacian to keep G's near-null pressure modes out of p0 (at 0 they
+  /// put errors of up to 90 % next to the walls at dp 1 cm; docs/validation.md, ## Fluid).
+  static constexpr Real start_alpha = 0.1;
   int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
   Real stabilisation = 0;         ///< alpha of fluid.projection_stabilisation
   DensityKernel kernel = DensityKernel::wendland;  ///< fluid.projection_kernel
@@ -784,6 +849,7 @@ struct FluidSolver::Impl {
   std::vector<std::uint8_t> remove;
   std::vector<Vec> dn_self;              ///< projection: dn_k/dx_k
   std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
+  std::vector<Real> surface_pressure;    ///< projection: the pressure of each particle as a free-surface row
   std::vector<Real> n_kernel, c_of;      ///< projection: each particle's kernel density, sum_j -w' r
   std::vector<LocalIndex> parent_of;     ///< projection: the wall particle whose group a dummy joins, or -1
   std::vector<Real> group_error;         ///< projection: a group dummy's density minus its reference
@@ -809,8 +875,8 @@ Real fluid_work_weight(const ParticleKind kind) {
 
 Real fluid_interaction_radius(const FluidSetup& setup) {
   const FluidParameters& f = setup.parameters;
-  // The projection's rows couple particles that share a neighbour: 2 re_gradient apart.
-  const Real reach = f.scheme == FluidScheme::projection ? 2 * f.re_gradient : f.re_gradient;
+  // The projection's rows couple particles that share a neighbour: two kernel radii apart.
+  const Real reach = f.scheme == FluidScheme::projection ? 2 * std::max(f.re_gradient, f.projection_radius) : f.re_gradient;
   return std::max(reach, f.re_laplacian) * setup.dp;
 }
 
@@ -915,6 +981,8 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
 
   t0 = Clock::now();
   if (m.projection) {
+    m.initial_step = m.n_steps == 0;
+    m.step_alpha = m.initial_step ? Impl::start_alpha : m.stabilisation;
     m.projection_geometry();
     m.gram_ready = false;
   }
@@ -954,6 +1022,10 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
     ++report.solves;
   }
   m.refresh_ghosts({fluid_fields::pressure}, report);
+  if (m.initial_step) {
+    m.start_from_rest(dt);
+    m.initial_step = false;
+  }
   report.residual = res.residual;
   if (!res.converged)
     throw std::runtime_error(fmt::format(

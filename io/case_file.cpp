@@ -986,6 +986,7 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidParamet
                                       [](const long long k) { return k >= 1 && k <= 100; },
                                       "an integer in [1, 100] (scheme projection: the most pressure solves of one step)");
   n.projection_kernel = r.option("projection_kernel", n.projection_kernel, density_kernel_names());
+  n.projection_radius = radius_in_dp(r, "projection_radius", n.projection_radius, "radius of the projection's density kernel");
   n.projection_stabilisation =
       r.number("projection_stabilisation", n.projection_stabilisation, [](Real x) { return x >= 0 && x <= 1; },
                "a number in [0, 1] (scheme projection: the share of the Laplacian in the pressure matrix)");

@@ -31,8 +31,9 @@ CaseSpec closed_box_case() {
                     "fluid.max_active_set_solves=20", "fluid.projection_stabilisation=0"});
 }
 
-/// The pressure system of the first solve of still water on the lattice (no gravity, one solve: the active
-/// set is not updated) with the given share of the stabilisation.
+/// The pressure system of still water on the lattice (no gravity, one solve: the active set is not updated)
+/// with the given share of the stabilisation, in the second step (the first one is the start from rest, whose
+/// system has its own stabilisation).
 LocalRows first_system(const Real alpha, std::vector<Vec>* positions = nullptr, std::vector<LocalIndex>* rows = nullptr,
                        std::vector<Real>* surface = nullptr) {
   const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/hydrostatic.yaml",
@@ -43,6 +44,7 @@ LocalRows first_system(const Real alpha, std::vector<Vec>* positions = nullptr, 
   Distribution dist{MPI_COMM_SELF, {}};
   FluidSolver fluid{fluid_setup(spec), scene.particles, dist};
   fluid.advance(0.0, 1e-3);
+  fluid.advance(1e-3, 1e-3);
   if (positions) *positions = scene.particles.position;
   if (rows) *rows = fluid.row_particles();
   if (surface) *surface = scene.particles.scalar_field("free_surface");
@@ -70,7 +72,7 @@ std::vector<Real> densities(const ParticleSet& p, const Real re, const DensityKe
 
 TEST(Projection, SystemSymmetricAndSorted) {
   const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/hydrostatic.yaml",
-                                  {"dp=0.01", "fluid.scheme=projection"});
+                                  {"dp=0.01", "fluid.scheme=projection", "fluid.projection_stabilisation=0.5"});
   Scene scene = build_scene(spec);
   Distribution dist{MPI_COMM_SELF, {}};
   FluidSolver fluid{fluid_setup(spec), scene.particles, dist};
@@ -101,7 +103,8 @@ TEST(Projection, RemovesTheDensityErrorAndKeepsComplementarity) {
   ParticleSet& p = scene.particles;
   Distribution dist{MPI_COMM_SELF, {}};
   FluidSolver fluid{fluid_setup(spec), p, dist};
-  const Real dp = spec.dp, re = spec.fluid.re_gradient * dp;
+  fluid.advance(0.0, 1e-3);  // the start from rest, on the lattice
+  const Real dp = spec.dp, re = spec.fluid.projection_radius * dp;
   const DensityKernel kernel = spec.fluid.projection_kernel;
   const Real n0 = lattice_sums(kernel, dp, re).n0;
   // Displace the fluid particles at random by up to 3 % of dp: rows get denser and sparser than n0, and
@@ -115,9 +118,11 @@ TEST(Projection, RemovesTheDensityErrorAndKeepsComplementarity) {
   const std::vector<Real> n_before = densities(p, re, kernel);
   std::map<GlobalId, std::pair<Real, Vec>> before;  // n and position before the step
   for (std::size_t i = 0; i < p.size(); ++i) before[p.global_id[i]] = {n_before[i], p.position[i]};
-  fluid.advance(0.0, 1e-3);
+  fluid.advance(1e-3, 1e-3);
   const std::vector<Real> after = densities(p, re, kernel);
   const auto& pressure = p.scalar_field("pressure");
+  // Each row's target: n0 less the offset the start from rest gave it (rest_offset).
+  const auto& offset = p.scalar_field("rest_offset");
   Real error_before = 0, error_pressed = 0, excess_free = 0;
   std::size_t n_pressed = 0, n_free = 0;
   // The fluid rows away from the box's walls and lid (3 dp), where the random displacements set the error.
@@ -127,23 +132,25 @@ TEST(Projection, RemovesTheDensityErrorAndKeepsComplementarity) {
   };
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!interior(i)) continue;
-    error_before = std::max(error_before, std::abs(before.at(p.global_id[i]).first - n0));
+    const Real target = n0 - offset[i];
+    error_before = std::max(error_before, std::abs(before.at(p.global_id[i]).first - target));
     if (pressure[i] > 0) {
-      error_pressed = std::max(error_pressed, std::abs(after[i] - n0));
+      error_pressed = std::max(error_pressed, std::abs(after[i] - target));
       ++n_pressed;
     } else {
-      excess_free = std::max(excess_free, after[i] - n0);
+      excess_free = std::max(excess_free, after[i] - target);
       ++n_free;
     }
   }
   ASSERT_GT(error_before, 1e-4 * n0);
   EXPECT_GT(n_pressed, 30u);
   EXPECT_GT(n_free, 30u);
-  // kappa = 1: the rows with a pressure reach n0 up to the second order of the displacements (measured:
-  // 2.9 % of the start's largest error; 7.1 % with the sign of dn_k/dx_k flipped); the rows left at p = 0 end
+  // kappa = 1: the rows with a pressure reach their target up to the second order of the displacements
+  // (measured: 6.0 % of the start's largest error in the step after the start from rest, whose active set the
+  // step starts from; 2.9 % as a first step, 7.1 % then with the sign of dn_k/dx_k flipped); the rows left at p = 0 end
   // less compressed than the start's largest error (measured 28 %: the active set stops adding rows after
   // two updates).
-  EXPECT_LT(error_pressed, 0.045 * error_before) << error_pressed / n0 << " vs " << error_before / n0;
+  EXPECT_LT(error_pressed, 0.065 * error_before) << error_pressed / n0 << " vs " << error_before / n0;
   EXPECT_LT(excess_free, 0.4 * error_before) << excess_free / n0 << " vs " << error_before / n0;
 }
 
@@ -157,19 +164,19 @@ TEST(Projection, StabilisationIsTheScaledLaplacian) {
   const LocalRows a0 = first_system(0.0), a1 = first_system(1.0, &x, &rows, &surface), a03 = first_system(0.3);
   ASSERT_EQ(a0.n_rows(), a1.n_rows());
   ASSERT_EQ(a0.n_rows(), a03.n_rows());
-  const Real dp = 0.01, re = 2.1 * dp, dt = 1e-3, compress = 1.0 / (1e5 * 1e5 * dt * dt);
+  const Real dp = 0.01, re = 2.1 * dp, re_p = 2.0 * dp, dt = 1e-3, compress = 1.0 / (1e5 * 1e5 * dt * dt);
   const LatticeConstants lat = lattice_constants(dp, re);
   Real c_sum = 0, n_interior = 0;
   for (std::size_t i = 0; i < x.size(); ++i) {
     if (surface[i] != 0 || !(x[i][1] > 0 && x[i][0] > 0 && x[i][0] < 0.2)) continue;  // fluid: inside the box
     for (std::size_t j = 0; j < x.size(); ++j)
-      if (j != i && in_support((x[j] - x[i]).squaredNorm(), re)) {
+      if (j != i && in_support((x[j] - x[i]).squaredNorm(), re_p)) {
         const Real r = (x[j] - x[i]).norm();
-        c_sum -= kernel_at(DensityKernel::wendland, r, re).dw * r;
+        c_sum -= kernel_at(DensityKernel::wendland, r, re_p).dw * r;
       }
     n_interior += 1;
   }
-  const Real s = c_sum / n_interior / (dim * lattice_sums(DensityKernel::wendland, dp, re).n0),
+  const Real s = c_sum / n_interior / (dim * lattice_sums(DensityKernel::wendland, dp, re_p).n0),
              a = 2.0 * dim / (lat.lambda * lat.n0);
   std::size_t n_checked = 0;
   for (std::size_t r = 0; r < a1.n_rows(); ++r) {
