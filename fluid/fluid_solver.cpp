@@ -540,18 +540,18 @@ struct FluidSolver::Impl {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (step_alpha < 1) {  // G (at alpha = 1 the matrix is the scaled Laplacian alone)
         if (roles[i] == Role::fluid) visit_k(i, dn_self[i]);
-      // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
-      for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
-        const auto k = static_cast<std::size_t>(near.index[q]);
-        if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
-      }
-      for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) {
-        const auto m = static_cast<std::size_t>(members[e]);
-        for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
+        // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
+        for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
           const auto k = static_cast<std::size_t>(near.index[q]);
           if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
         }
-      }
+        for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) {
+          const auto m = static_cast<std::size_t>(members[e]);
+          for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
+            const auto k = static_cast<std::size_t>(near.index[q]);
+            if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
+          }
+        }
       }
       if (step_alpha > 0)
         // The pairs of the row's group (its particle and its dummies) with the other groups' particles.
@@ -596,8 +596,8 @@ struct FluidSolver::Impl {
     sys.col.clear();
     sys.value.clear();
     // The first step solves for the incompressible pressure (kappa 1, the compressibility 1e-4 of the case's).
-    const Real compress = (initial_step ? 1e-4 : 1.0) / (c * c * dt * dt);
-    const Real source = (initial_step ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
+    const Real compress = (initial_step() ? 1e-4 : 1.0) / (c * c * dt * dt);
+    const Real source = (initial_step() ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
     projection_source = source;
     const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + compress;
     sys.row_ptr[0] = 0;
@@ -657,12 +657,16 @@ struct FluidSolver::Impl {
     return changed != 0;
   }
 
-  /// The start from rest (the projection's first step, whose system is the incompressible one: kappa 1, no
-  /// compressibility, stabilisation start_alpha): its pressure p0 holds the fluid. Each row then gets the offset o that makes p0 the
-  /// solution of the scheme's own system in the state the step leaves, (G' + eps) p0 = kappa S (b + o) with
-  /// b the row's density error and S = rho / (dt^2 n0): o = b (1/kappa - 1) + (eps - eps0) p0 / (kappa S).
-  /// So the fluid starts in its discrete equilibrium, compressed as the weak compressibility wants it,
-  /// instead of having to compress and ring first (docs/validation.md, ## Fluid).
+  /// The projection's first step (the start from rest), whose system is the incompressible one: kappa 1, the
+  /// compressibility 1e-4 of the case's, stabilisation start_alpha.
+  bool initial_step() const { return projection && n_steps == 0; }
+
+  /// The start from rest, after the first step's solve: its pressure p0 holds the fluid. Each row then gets
+  /// the offset o that makes p0 the solution of the later steps' system in the state this step leaves,
+  /// (G' + eps) p0 = kappa S (b + o), b the row's density error, S = rho / (dt^2 n0), G' the matrix of
+  /// projection_stabilisation: o = (G' + eps) p0 / (kappa S) - b. So the fluid starts in its discrete
+  /// equilibrium, compressed as the weak compressibility wants it, instead of having to compress and ring
+  /// first (docs/validation.md, ## Fluid).
   void start_from_rest(const Real dt) {
     step_alpha = stabilisation;
     build_gram();  // G' of the later steps
@@ -809,7 +813,6 @@ struct FluidSolver::Impl {
   Real beta1 = 0, beta2 = 0;
   bool corrected = false;
   bool projection = false;        ///< fluid.scheme = projection
-  bool initial_step = false;      ///< the projection's first step (start_from_rest)
   Real step_alpha = 0;            ///< the stabilisation of this step's matrix: start_alpha in the first step, else alpha
   /// The first step's stabilisation: nearly the exact projection, whose pressure balances gravity in the
   /// force's own terms, with enough of the Laplacian to keep G's near-null pressure modes out of p0 (at 0 they
@@ -981,8 +984,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
 
   t0 = Clock::now();
   if (m.projection) {
-    m.initial_step = m.n_steps == 0;
-    m.step_alpha = m.initial_step ? Impl::start_alpha : m.stabilisation;
+    m.step_alpha = m.initial_step() ? Impl::start_alpha : m.stabilisation;
     m.projection_geometry();
     m.gram_ready = false;
   }
@@ -1022,10 +1024,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
     ++report.solves;
   }
   m.refresh_ghosts({fluid_fields::pressure}, report);
-  if (m.initial_step) {
-    m.start_from_rest(dt);
-    m.initial_step = false;
-  }
+  if (m.initial_step()) m.start_from_rest(dt);
   report.residual = res.residual;
   if (!res.converged)
     throw std::runtime_error(fmt::format(
