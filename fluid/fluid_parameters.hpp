@@ -110,7 +110,7 @@ struct FluidParameters {
   Real beta1 = 0.97;            ///< free surface: n_i < beta1 n0 ...
   Real beta2 = 0.85;            ///< ... and N_i < beta2 N0
   PressureGradient gradient = PressureGradient::min_pressure;
-  FluidScheme scheme = FluidScheme::standard;
+  FluidScheme scheme = FluidScheme::projection;
   /// projection: the most solves of one step while the active set changes.
   int max_active_set_solves = 6;
   /// projection: the share alpha of the pressure stabilisation, the PPE matrix (1 - alpha) G + alpha s L_g

@@ -129,6 +129,7 @@ struct FluidSolver::Impl {
     if (projection) {
       p.add_scalar_field(reference_density_field, 0.0);
       p.add_scalar_field(rest_offset_field, 0.0);
+      p.add_scalar_field(rest_rate_field, 0.0);
     }
     if (motion.moving() && !p.has_vector_field(wall_reference_field)) {
       auto& reference = p.add_vector_field(wall_reference_field);
@@ -138,22 +139,40 @@ struct FluidSolver::Impl {
 
   /// The particle field that holds each wall particle's position in the tank's rest frame (moving tanks).
   static constexpr const char* wall_reference_field = "wall_reference";
-  /// The projection: each dummy particle's number density in the initial state (its wall group's reference).
+  /// The projection: in the initial state, each dummy particle's number density (its wall group's reference),
+  /// and each wall or solid particle's number density from its neighbours that are not fluid (the boundary
+  /// part of its row's density, held at that value: the walls' and solids' own motion is no density change).
   static constexpr const char* reference_density_field = "reference_density";
-  /// The projection: each row particle's number density offset that makes the initial state the scheme's
-  /// equilibrium under the initial pressure (start_from_rest).
+  /// The projection: each row particle's number density offset o = o_0 + o_2 dt^2 that makes the initial
+  /// state the scheme's equilibrium under the initial pressure at any dt (start_from_rest): o_0 here, o_2 in
+  /// rest_rate_field [1/s^2].
   static constexpr const char* rest_offset_field = "rest_offset";
+  static constexpr const char* rest_rate_field = "rest_rate";
 
-  /// The projection, first step: the reference densities of the dummy particles, at the initial positions.
+  /// The projection, first step, at the initial positions: the reference densities (reference_density_field),
+  /// and each row's density error before the step moves anything (initial_error, by the rows' definition of
+  /// build_gram).
   void reference_densities() {
     auto& reference = p.scalar_field(reference_density_field);
-    const auto takes_part = [&](const std::size_t j) { return roles[j] != Role::none; };
+    initial_error.assign(p.n_owned(), 0.0);
     for (std::size_t i = 0; i < p.n_owned(); ++i) {
-      if (p.kind[i] != ParticleKind::dummy) continue;
+      if (p.kind[i] == ParticleKind::fluid || roles[i] == Role::none) continue;
+      const bool dummy = p.kind[i] == ParticleKind::dummy;
+      Real n_boundary = 0, n_fluid_i = 0;  // the neighbours that are not fluid (all of them for a dummy), the fluid
+      for_each_pair(p.position, nl, re_p, i, [&](const std::size_t j) { return roles[j] != Role::none; },
+                    [&](const std::size_t j, const Vec&, const Real r2, Real) {
+                      const Real w = kernel_at(kernel, std::sqrt(r2), re_p).w;
+                      (dummy || roles[j] != Role::fluid ? n_boundary : n_fluid_i) += w;
+                    });
+      reference[i] = n_boundary;
+      initial_error[i] = n_fluid_i + n_boundary - n0_kernel;
+    }
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (roles[i] != Role::fluid) continue;
       Real n_i = 0;
-      for_each_pair(p.position, nl, re_p, i, takes_part,
+      for_each_pair(p.position, nl, re_p, i, [&](const std::size_t j) { return roles[j] != Role::none; },
                     [&](std::size_t, const Vec&, const Real r2, Real) { n_i += kernel_at(kernel, std::sqrt(r2), re_p).w; });
-      reference[i] = n_i;
+      initial_error[i] = n_i - n0_kernel;
     }
   }
 
@@ -295,6 +314,18 @@ struct FluidSolver::Impl {
       const bool kept = warm_start && surface[i] != 0;
       surface[i] = has_row(roles[i]) && (geometric || kept) ? 1.0 : 0.0;
     }
+    if (!projection) return;
+    // A wall or solid row with no fluid particle within the kernel's reach constrains nothing that moves: it is
+    // a free-surface row (p = 0) and stays one until the water reaches it.
+    dry.assign(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (roles[i] != Role::boundary) continue;
+      bool wet = false;
+      for (std::size_t q = near.begin(i); q < near.end(i) && !wet; ++q)
+        wet = roles[static_cast<std::size_t>(near.index[q])] == Role::fluid;
+      dry[i] = !wet;
+      if (!wet) surface[i] = 1;
+    }
   }
 
   /// Eq. 23 assembled for this rank's rows (its owned particles with a pressure unknown): -lap P + P / (c^2
@@ -406,21 +437,25 @@ struct FluidSolver::Impl {
     dn_pair.resize(near.n_pairs());
     dn_self.resize(n);
     n_kernel.resize(n);
+    n_fluid.resize(n);
     c_of.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
       Vec s = Vec::Zero();
-      Real n_k = 0, c_k = 0;
+      Real n_k = 0, n_f = 0, c_k = 0;
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
-        const Vec r_jk = p.position[k] - p.position[static_cast<std::size_t>(near.index[q])];
+        const auto j = static_cast<std::size_t>(near.index[q]);
+        const Vec r_jk = p.position[k] - p.position[j];
         const Real r = r_jk.norm();
         const KernelValue kv = kernel_at(kernel, r, re_p);
         dn_pair[q] = (kv.dw / r) * r_jk;
         s += dn_pair[q];
         n_k += kv.w;
+        if (roles[j] == Role::fluid) n_f += kv.w;
         c_k -= kv.dw * r;
       }
       dn_self[k] = s;
       n_kernel[k] = n_k;
+      n_fluid[k] = n_f;
       c_of[k] = c_k;
     }
     Real sums[2] = {0, 0};  // sum over the interior fluid particles of sum_j -w'(r_ij) r_ij, their count
@@ -479,9 +514,11 @@ struct FluidSolver::Impl {
   /// neither a smooth pressure nor the hydrostatic one in the bulk, and damps the oscillating pressures that G
   /// alone leaves free (N^T p of a checkerboard p is nearly zero). Built once per step, after the rows are
   /// numbered (assemble), and filtered by the active set at each solve.
-  void build_gram() {
+  void build_gram(const Real dt) {
     const std::size_t n_rows = particle_of_row.size();
     const auto& rest_offset = p.scalar_field(rest_offset_field);
+    const auto& rest_rate = p.scalar_field(rest_rate_field);
+    const auto& reference = p.scalar_field(reference_density_field);
     const std::size_t n_columns = n_rows + sys.remote_id.size();
     acc.assign(n_columns, 0.0);
     lap_acc.assign(n_columns, 0.0);
@@ -533,7 +570,9 @@ struct FluidSolver::Impl {
     row_error.resize(n_rows);
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      row_error[r] = n_kernel[i] - n0_kernel + rest_offset[i];
+      // A wall or solid row: its fluid neighbours' part of the density, and the rest at its reference.
+      const Real n_i = roles[i] == Role::fluid ? n_kernel[i] : n_fluid[i] + reference[i];
+      row_error[r] = n_i - n0_kernel + rest_offset[i] + rest_rate[i] * dt * dt;
       for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) row_error[r] += group_error[static_cast<std::size_t>(members[e])];
     }
     for (std::size_t r = 0; r < n_rows; ++r) {
@@ -588,7 +627,7 @@ struct FluidSolver::Impl {
   /// rows and columns that are not free surface; free-surface rows p = 0.
   void assemble_projection(const Real dt) {
     if (!gram_ready) {
-      build_gram();
+      build_gram(dt);
       gram_ready = true;
     }
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
@@ -644,7 +683,7 @@ struct FluidSolver::Impl {
         }
         continue;
       }
-      if (!additions) continue;
+      if (!additions || dry[i]) continue;
       Real w = -projection_source * row_error[r];
       for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
         w += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
@@ -663,24 +702,29 @@ struct FluidSolver::Impl {
 
   /// The start from rest, after the first step's solve: its pressure p0 holds the fluid. Each row then gets
   /// the offset o that makes p0 the solution of the later steps' system in the state this step leaves,
-  /// (G' + eps) p0 = kappa S (b + o), b the row's density error, S = rho / (dt^2 n0), G' the matrix of
-  /// projection_stabilisation: o = (G' + eps) p0 / (kappa S) - b. So the fluid starts in its discrete
-  /// equilibrium, compressed as the weak compressibility wants it, instead of having to compress and ring
-  /// first (docs/validation.md, ## Fluid).
+  /// (G' + eps) p0 = kappa S (b + o), b the row's density error, S = rho / (dt^2 n0), eps = 1 / (c^2 dt^2),
+  /// G' the matrix of projection_stabilisation. b = b_0 + (b - b_0), b_0 the error at the initial positions
+  /// and b - b_0 the prediction's, which grows as dt^2 (the fluid falls g dt^2); so does G' p0 / (kappa S).
+  /// Hence o = o_0 + o_2 dt^2 holds p0 at every later dt: o_0 = eps p0 / (kappa S) - b_0 = p0 n0 / (kappa rho
+  /// c^2) - b_0, o_2 = (G' p0 / (kappa S) - (b - b_0)) / dt^2. So the fluid starts in its discrete equilibrium,
+  /// compressed as the weak compressibility wants it, instead of having to compress and ring first
+  /// (docs/validation.md, ## Fluid).
   void start_from_rest(const Real dt) {
     step_alpha = stabilisation;
-    build_gram();  // G' of the later steps
+    build_gram(dt);  // G' of the later steps (the offsets are still 0: row_error is b)
     auto& rest_offset = p.scalar_field(rest_offset_field);
+    auto& rest_rate = p.scalar_field(rest_rate_field);
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const auto& pressure = p.scalar_field(fluid_fields::pressure);  // p0, current at the ghosts
-    const Real eps = 1.0 / (c * c * dt * dt), s = kappa * rho / (dt * dt) / n0_kernel;
+    const Real s = kappa * rho / (dt * dt) / n0_kernel;
     for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (surface[i] != 0) continue;
-      Real a_p = eps * pressure[i];  // (G' p0 + eps p0)_r, free-surface columns at their pressure
+      Real g_p = 0;  // (G' p0)_r, free-surface columns at their pressure
       for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
-        a_p += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
-      rest_offset[i] = a_p / s - row_error[r];
+        g_p += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
+      rest_offset[i] = pressure[i] * n0_kernel / (kappa * rho * c * c) - initial_error[i];
+      rest_rate[i] = (g_p / s - (row_error[r] - initial_error[i])) / (dt * dt);
     }
   }
 
@@ -854,6 +898,9 @@ struct FluidSolver::Impl {
   std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
   std::vector<Real> surface_pressure;    ///< projection: the pressure of each particle as a free-surface row
   std::vector<Real> n_kernel, c_of;      ///< projection: each particle's kernel density, sum_j -w' r
+  std::vector<Real> n_fluid;             ///< projection: the fluid neighbours' part of n_kernel
+  std::vector<Real> initial_error;       ///< projection, first step: each row's density error at the start
+  std::vector<std::uint8_t> dry;         ///< projection: a wall or solid row without a fluid neighbour
   std::vector<LocalIndex> parent_of;     ///< projection: the wall particle whose group a dummy joins, or -1
   std::vector<Real> group_error;         ///< projection: a group dummy's density minus its reference
   std::vector<std::size_t> member_ptr;   ///< projection: each row's group dummies (CSR)

@@ -992,7 +992,8 @@ void read_fluid_numerics(MapReader r, const TankMotionSpec& motion, FluidParamet
                "a number in [0, 1] (scheme projection: the share of the Laplacian in the pressure matrix)");
   if (n.scheme == FluidScheme::projection && n.gradient == PressureGradient::corrected)
     r.source().fail(r.at("gradient"), "fluid.gradient = corrected: expected min_pressure (the default) with fluid.scheme = "
-                                      "projection, which has its own pressure force");
+                                      "projection (the default), which has its own pressure force; the corrected "
+                                      "gradient needs fluid.scheme = standard");
   n.solver = r.option("solver", n.solver, krylov_solver_names());
   n.preconditioner = r.option("preconditioner", n.preconditioner, preconditioner_names());
   n.tolerance = r.number("tolerance", n.tolerance, in_open(0, 1), "a number in (0, 1) (relative residual of the pressure solve)");

@@ -139,6 +139,7 @@ TEST(CaseFile, ValidCaseGivesTheExpectedValues) {
   EXPECT_DOUBLE_EQ(c.tank_motion.pivot[0], 0.3);
 
   EXPECT_EQ(c.coupling.subcycles, 0);  // auto
+  EXPECT_EQ(c.fluid.scheme, FluidScheme::standard);
   EXPECT_EQ(c.fluid.gradient, PressureGradient::corrected);
   EXPECT_EQ(c.fluid.solver, KrylovSolver::gmres);
   EXPECT_EQ(c.fluid.preconditioner, Preconditioner::ilu);
@@ -210,6 +211,9 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_EQ(c.coupling.subcycles, 1);
   EXPECT_DOUBLE_EQ(c.coupling.solid_damping, 0.5);
   EXPECT_DOUBLE_EQ(c.coupling.load_relaxation, 1.0);
+  EXPECT_EQ(c.fluid.scheme, FluidScheme::projection);
+  EXPECT_DOUBLE_EQ(c.fluid.projection_stabilisation, 1.0);
+  EXPECT_DOUBLE_EQ(c.fluid.projection_radius, 2.0);
   EXPECT_EQ(c.fluid.solver, KrylovSolver::cg);
   EXPECT_EQ(c.fluid.preconditioner, Preconditioner::ssor);
   EXPECT_EQ(c.fluid.preconditioner_rebuild_every, 1);
@@ -492,6 +496,10 @@ TEST(CaseFileErrors, SolidLoads) {
               HasSubstr("solid.normalisation = grid: expected one of: particle, lattice, mean"));
   EXPECT_THAT(error_of(valid_with("volumetric_strain: corrected", "volumetric_strain: exact")),
               HasSubstr("solid.volumetric_strain = exact: expected one of: n0, corrected"));
+  // The corrected gradient belongs to the standard scheme; the default scheme, the projection, refuses it.
+  EXPECT_THAT(error_of(valid_with("  scheme: standard\n", "")),
+              HasSubstr("fluid.gradient = corrected: expected min_pressure (the default) with fluid.scheme = projection "
+                        "(the default)"));
 }
 
 TEST(CaseFile, WaveletTableIsReadRelativeToTheCaseFile) {

@@ -1,6 +1,7 @@
-// Unit tests of the fluid: PPE assembly (seed 004 eq. 12, 23: symmetric, diagonally dominant, the
-// lattice value of an interior row), the free-surface double check (§4.3), and the pressure solve's
-// true residual for every solver / preconditioner choice.
+// Unit tests of the fluid's standard scheme (fluid.scheme = standard): PPE assembly (seed 004 eq. 12, 23:
+// symmetric, diagonally dominant, the lattice value of an interior row), the free-surface double check
+// (§4.3), and the pressure solve's true residual for every solver / preconditioner choice. The projection's
+// own tests are in test_fluid_projection.cpp.
 #include "core/distribution.hpp"
 #include "core/kernel.hpp"
 #include "fluid/fluid_solver.hpp"
@@ -20,7 +21,7 @@ namespace {
 
 CaseSpec still_water_case() {
   return load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/hydrostatic.yaml",
-                   {"dp=0.01", "fluid.preconditioner=jacobi"});
+                   {"dp=0.01", "fluid.preconditioner=jacobi", "fluid.scheme=standard"});
 }
 
 struct OneStep {

@@ -1,0 +1,115 @@
+#!/usr/bin/python3
+"""The numerical compressibility of a run: in frames of an mpsfsi run (one rank), the largest and the
+99th-percentile |n_i - n0| / n0 over the interior fluid particles (fluid particles not flagged free surface;
+frames without free-surface flags, the initial one, are skipped),
+n_i the number density over all particles (fluid, walls, dummies, solids) and n0 its value on the square
+lattice of the case's dp. Two kernels: the projection's (Wendland's C2 at fluid.projection_radius, default 2.0
+dp) and the MPS weight of eq. 7 at fluid.re_gradient (default 2.1 dp), whichever scheme ran.
+
+Usage
+  mpsfsi run cases/hydrostatic.yaml --end-time 2 --output out/hs
+  scripts/density_error.py out/hs                       # every frame
+  scripts/density_error.py out/hs --frames 0,20,-1      # frame numbers, negative from the end
+  scripts/density_error.py out/db --summary             # one line: the largest over the frames
+"""
+import argparse
+import glob
+import os
+import re
+import sys
+
+import numpy as np
+import yaml
+from scipy.spatial import cKDTree
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hydrostatic_check import read_frame  # noqa: E402
+
+FLUID = 0  # ParticleKind::fluid in the `kind` field
+
+
+def wendland(r, re):
+    q = np.clip(r / re, 0.0, 1.0)
+    return (1 - q) ** 4 * (1 + 4 * q)
+
+
+def mps(r, re):
+    r = np.maximum(r, 1e-300)
+    return np.where(r < re, re / r - 1.0, 0.0)
+
+
+def lattice_n0(w, dp, re, dim):
+    k = int(np.ceil(re / dp)) + 1
+    axes = [np.arange(-k, k + 1) * dp] * dim
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, dim)
+    r = np.linalg.norm(pts, axis=1)
+    r = r[(r > 0) & (r < re)]
+    return float(np.sum(w(r, re)))
+
+
+def densities(x, at, w, re):
+    tree = cKDTree(x)
+    n = np.zeros(len(at))
+    for k, i in enumerate(at):
+        js = tree.query_ball_point(x[i], re)
+        r = np.linalg.norm(x[js] - x[i], axis=1)
+        r = r[r > 0]
+        n[k] = np.sum(w(r, re))
+    return n
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run", help="output folder of a run (holding case.resolved.yaml and particles_*.vtu)")
+    ap.add_argument("--frames", default=None, help="comma-separated frame numbers (default: all)")
+    ap.add_argument("--summary", action="store_true", help="print only the largest values over the frames")
+    args = ap.parse_args()
+    files = sorted(f for f in glob.glob(os.path.join(args.run, "particles_*.vtu"))
+                   if re.fullmatch(r"particles_\d+\.vtu", os.path.basename(f)))
+    if not files:
+        sys.exit(f"density_error.py: no particles_*.vtu in '{args.run}' (a run on one rank writes them)")
+    if args.frames:
+        try:
+            files = [files[int(k)] for k in args.frames.split(",")]
+        except (ValueError, IndexError):
+            sys.exit(f"density_error.py: --frames {args.frames}: expected frame numbers among 0..{len(files) - 1}")
+    case_path = os.path.join(args.run, "case.resolved.yaml")
+    try:
+        case = yaml.safe_load(open(case_path))
+    except OSError as e:
+        sys.exit(f"density_error.py: cannot read {case_path}: {e}")
+    dp = float(case["dp"])
+    fluid = case.get("fluid") or {}
+    kernels = [("wendland", wendland, float(fluid.get("projection_radius", 2.0)) * dp),
+               ("mps", mps, float(fluid.get("re_gradient", 2.1)) * dp)]
+    worst = {name: (0.0, 0.0, "") for name, _, _ in kernels}
+    if not args.summary:
+        print("| frame | interior particles | " + " | ".join(f"{n} max / 99th %" for n, _, _ in kernels) + " |")
+        print("|---|---|" + "---|" * len(kernels))
+    for f in files:
+        x, fields = read_frame(f)
+        dim = 3 if np.ptp(x[:, 2]) > 0 else 2
+        x = x[:, :dim]
+        if not np.any(fields["free_surface"] != 0):
+            continue  # the initial frame: no step has flagged the free surface yet
+        interior = np.where((fields["kind"] == FLUID) & (fields["free_surface"] == 0))[0]
+        cells = []
+        for name, w, radius in kernels:
+            if len(interior) == 0:
+                cells.append("-")
+                continue
+            n0 = lattice_n0(w, dp, radius, dim)
+            err = 100 * np.abs(densities(x, interior, w, radius) - n0) / n0
+            e_max, e_99 = float(err.max()), float(np.percentile(err, 99))
+            cells.append(f"{e_max:.2f} / {e_99:.2f}")
+            if e_max > worst[name][0]:
+                worst[name] = (e_max, e_99, os.path.basename(f))
+        if not args.summary:
+            print(f"| {os.path.basename(f)} | {len(interior)} | " + " | ".join(cells) + " |")
+    if args.summary:
+        for name, (e_max, e_99, frame) in worst.items():
+            print(f"{name}: largest interior |n - n0| / n0 {e_max:.2f} % (99th percentile {e_99:.2f} %) in {frame}")
+
+
+if __name__ == "__main__":
+    main()
