@@ -51,14 +51,15 @@ inline const NameTable<PressureGradient>& pressure_gradient_names() {
 }
 inline std::string_view to_string(const PressureGradient v) { return name_of(pressure_gradient_names(), v); }
 
-/// The pressure scheme. projection: the projection of the number density (docs/validation.md,
+/// The pressure scheme. projection (the default): the projection of the number density (docs/validation.md,
 /// ## Fluid): the force on particle k is -(1/rho)(d/C) sum_i p_i dn_i/dx_k (the constraint force of the
 /// density, Wendland's kernel), and the PPE matrix is (1 - alpha) G + alpha s L_g, G = (d/C) N N^T / n0 with
 /// N_ik = dn_i/dx_k built from that same operator and L_g its long-wave match (projection_stabilisation);
 /// rows with a negative pressure become free-surface rows and compressed free-surface rows become rows again
-/// (a complementarity active set); the first step starts the fluid from its equilibrium (start_from_rest in
-/// fluid/fluid_solver.cpp). standard (the default): the PPE with the Laplacian of eq. 12 and the gradient of `gradient` for
-/// the force (no force-free state at rest).
+/// (a complementarity active set); wall and solid rows hold their non-fluid density at its initial value, and
+/// those with no fluid in reach hold p = 0; the first step starts the fluid from its equilibrium
+/// (start_from_rest in fluid/fluid_solver.cpp). standard: the PPE with the Laplacian of eq. 12 and the gradient
+/// of `gradient` for the force (no force-free state at rest).
 enum class FluidScheme { standard, projection };
 inline const NameTable<FluidScheme>& fluid_scheme_names() {
   static const NameTable<FluidScheme> t = {{"standard", FluidScheme::standard}, {"projection", FluidScheme::projection}};
