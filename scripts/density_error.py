@@ -14,17 +14,12 @@ Usage
   scripts/density_error.py out/db --summary             # one line: the largest over the frames
 """
 import argparse
-import glob
 import os
-import re
-import sys
 
 import numpy as np
-import yaml
 from scipy.spatial import cKDTree
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from hydrostatic_check import read_frame  # noqa: E402
+from run_output import frame_files, pick_frames, read_case, read_frame
 
 FLUID = 0  # ParticleKind::fluid in the `kind` field
 
@@ -67,20 +62,9 @@ def main():
                     help="interior: more than this many dp from every free-surface particle (default 3; 0: not flagged)")
     ap.add_argument("--summary", action="store_true", help="print only the largest values over the frames")
     args = ap.parse_args()
-    files = sorted(f for f in glob.glob(os.path.join(args.run, "particles_*.vtu"))
-                   if re.fullmatch(r"particles_\d+\.vtu", os.path.basename(f)))
-    if not files:
-        sys.exit(f"density_error.py: no particles_*.vtu in '{args.run}' (a run on one rank writes them)")
-    if args.frames:
-        try:
-            files = [files[int(k)] for k in args.frames.split(",")]
-        except (ValueError, IndexError):
-            sys.exit(f"density_error.py: --frames {args.frames}: expected frame numbers among 0..{len(files) - 1}")
-    case_path = os.path.join(args.run, "case.resolved.yaml")
-    try:
-        case = yaml.safe_load(open(case_path))
-    except OSError as e:
-        sys.exit(f"density_error.py: cannot read {case_path}: {e}")
+    prog = "density_error.py"
+    files = pick_frames(frame_files(args.run, prog), args.frames, prog)
+    case = read_case(args.run, prog)
     dp = float(case["dp"])
     fluid = case.get("fluid") or {}
     kernels = [("wendland", wendland, float(fluid.get("projection_radius", 2.0)) * dp),

@@ -14,28 +14,14 @@ Usage
   scripts/hydrostatic_check.py out/hs --frames 0,20,-1   # frame numbers, negative from the end
 """
 import argparse
-import glob
 import os
-import re
 import sys
 
 import numpy as np
-import vtk
-import yaml
-from vtk.util.numpy_support import vtk_to_numpy
+
+from run_output import frame_files, pick_frames, read_case, read_frame
 
 FLUID = 0  # ParticleKind::fluid in the `kind` field
-
-
-def read_frame(path):
-    r = vtk.vtkXMLUnstructuredGridReader()
-    r.SetFileName(path)
-    r.Update()
-    g = r.GetOutput()
-    pd = g.GetPointData()
-    x = vtk_to_numpy(g.GetPoints().GetData())
-    fields = {pd.GetArrayName(i): vtk_to_numpy(pd.GetArray(i)) for i in range(pd.GetNumberOfArrays())}
-    return x, fields
 
 
 def main():
@@ -44,38 +30,27 @@ def main():
     ap.add_argument("--frames", default="-1", help="comma-separated frame numbers (default: the last)")
     ap.add_argument("--body", default=None, help="the fluid body (default: the first fluid body of the case)")
     args = ap.parse_args()
-    files = sorted(f for f in glob.glob(os.path.join(args.run, "particles_*.vtu"))
-                   if re.fullmatch(r"particles_\d+\.vtu", os.path.basename(f)))
-    if not files:
-        sys.exit(f"hydrostatic_check.py: no particles_*.vtu in '{args.run}' (a run on one rank writes them)")
-    case_path = os.path.join(args.run, "case.resolved.yaml")
-    try:
-        case = yaml.safe_load(open(case_path))
-    except OSError as e:
-        sys.exit(f"hydrostatic_check.py: cannot read {case_path}: {e}")
+    prog = "hydrostatic_check.py"
+    all_files = frame_files(args.run, prog)
+    files = pick_frames(all_files, args.frames, prog)
+    case = read_case(args.run, prog)
     fluids = [b for b in case["bodies"] if b.get("kind") == "fluid" and (args.body is None or b["name"] == args.body)]
     if not fluids:
-        sys.exit(f"hydrostatic_check.py: no fluid body{' ' + args.body if args.body else ''} in {case_path}")
+        sys.exit(f"{prog}: no fluid body{' ' + args.body if args.body else ''} in {args.run}/case.resolved.yaml")
     body = fluids[0]
     rho = float(case["materials"][body["material"]]["rho"])
     g = float(np.linalg.norm(case["gravity"]))
     dp = float(case["dp"])
     y0, y1 = float(body["rectangle"]["min"][1]), float(body["rectangle"]["max"][1])
     h = y1 - y0
-    try:
-        frames = [int(s) for s in args.frames.split(",")]
-    except ValueError:
-        sys.exit(f"hydrostatic_check.py: --frames '{args.frames}': expected comma-separated integers")
-    _, first_f = read_frame(files[0])
+    _, first_f = read_frame(all_files[0])
     n_first = int(np.sum(first_f["kind"] == FLUID))
     print(f"{body['name']}: h = {h:g} m, rho g h = {rho * g * h:.1f} Pa, sqrt(g h) = {np.sqrt(g * h):.4f} m/s, "
           f"{n_first} fluid particles in the first frame")
     print("| frame | fluid | top / h | max speed % sqrt(gh) | 99th pct % | median % | pressure error % (depth > 3 dp): max / median |")
     print("|---|---|---|---|---|---|---|")
-    for k in frames:
-        if not -len(files) <= k < len(files):
-            sys.exit(f"hydrostatic_check.py: frame {k} out of range (the run has {len(files)} frames)")
-        x, f = read_frame(files[k])
+    for path in files:
+        x, f = read_frame(path)
         fluid = f["kind"] == FLUID
         v = np.linalg.norm(f["velocity"][fluid], axis=1) / np.sqrt(g * h) * 100
         depth = y1 - x[fluid, 1]
@@ -88,7 +63,7 @@ def main():
         column = np.floor(x[fluid, 0] / dp).astype(int)
         tops = [x[fluid, 1][column == c].max() for c in np.unique(column)]
         top = (np.mean(tops) + dp / 2 - y0) / h
-        print(f"| {os.path.basename(files[k])} | {n} | {top:.4f} | {v.max():.3f} | {np.percentile(v, 99):.3f} | "
+        print(f"| {os.path.basename(path)} | {n} | {top:.4f} | {v.max():.3f} | {np.percentile(v, 99):.3f} | "
               f"{np.median(v):.3f} | {err:.2f} / {err_median:.2f} |")
     return 0
 

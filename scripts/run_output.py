@@ -1,0 +1,55 @@
+"""Reading the output folder of an mpsfsi run on one rank, shared by the analysis scripts
+(hydrostatic_check.py, density_error.py): its frames (particles_NNNNNN.vtu), one frame's points and
+point fields, the frames a --frames option picks, and the resolved case (case.resolved.yaml). Errors exit
+with a message that names the calling script.
+"""
+import glob
+import os
+import re
+import sys
+
+import vtk
+import yaml
+from vtk.util.numpy_support import vtk_to_numpy
+
+
+def read_frame(path):
+    """Points (n x 3) and a dict of point fields of one .vtu frame."""
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(path)
+    r.Update()
+    g = r.GetOutput()
+    pd = g.GetPointData()
+    x = vtk_to_numpy(g.GetPoints().GetData())
+    fields = {pd.GetArrayName(i): vtk_to_numpy(pd.GetArray(i)) for i in range(pd.GetNumberOfArrays())}
+    return x, fields
+
+
+def frame_files(run, prog):
+    """The run's frames in order; exits if it has none."""
+    files = sorted(f for f in glob.glob(os.path.join(run, "particles_*.vtu"))
+                   if re.fullmatch(r"particles_\d+\.vtu", os.path.basename(f)))
+    if not files:
+        sys.exit(f"{prog}: no particles_*.vtu in '{run}' (a run on one rank writes them)")
+    return files
+
+
+def pick_frames(files, frames, prog):
+    """The files named by a comma-separated list of frame numbers (negative from the end); all if frames is None."""
+    if frames is None:
+        return files
+    try:
+        return [files[int(k)] for k in frames.split(",")]
+    except (ValueError, IndexError):
+        sys.exit(f"{prog}: --frames '{frames}': expected frame numbers in [-{len(files)}, {len(files) - 1}] "
+                 "separated by commas")
+
+
+def read_case(run, prog):
+    """The run's case.resolved.yaml as a dict."""
+    path = os.path.join(run, "case.resolved.yaml")
+    try:
+        with open(path) as f:
+            return yaml.safe_load(f)
+    except OSError as e:
+        sys.exit(f"{prog}: cannot read {path}: {e}")
