@@ -158,23 +158,15 @@ struct FluidSolver::Impl {
     auto& reference = p.scalar_field(reference_density_field);
     initial_error.assign(p.n_owned(), 0.0);
     for (std::size_t i = 0; i < p.n_owned(); ++i) {
-      if (p.kind[i] == ParticleKind::fluid || roles[i] == Role::none) continue;
-      const bool dummy = p.kind[i] == ParticleKind::dummy;
-      Real n_boundary = 0, n_fluid_i = 0;  // the neighbours that are not fluid (all of them for a dummy), the fluid
+      if (roles[i] == Role::none) continue;
+      Real n_fluid_i = 0, n_other = 0;  // the kernel density from the fluid neighbours, from the others
       for_each_pair(p.position, nl, re_p, i, [&](const std::size_t j) { return roles[j] != Role::none; },
                     [&](const std::size_t j, const Vec&, const Real r2, Real) {
-                      const Real w = kernel_at(kernel, std::sqrt(r2), re_p).w;
-                      (dummy || roles[j] != Role::fluid ? n_boundary : n_fluid_i) += w;
+                      (roles[j] == Role::fluid ? n_fluid_i : n_other) += kernel_at(kernel, std::sqrt(r2), re_p).w;
                     });
-      reference[i] = n_boundary;
-      initial_error[i] = n_fluid_i + n_boundary - n0_kernel;
-    }
-    for (std::size_t i = 0; i < p.n_owned(); ++i) {
-      if (roles[i] != Role::fluid) continue;
-      Real n_i = 0;
-      for_each_pair(p.position, nl, re_p, i, [&](const std::size_t j) { return roles[j] != Role::none; },
-                    [&](std::size_t, const Vec&, const Real r2, Real) { n_i += kernel_at(kernel, std::sqrt(r2), re_p).w; });
-      initial_error[i] = n_i - n0_kernel;
+      initial_error[i] = n_fluid_i + n_other - n0_kernel;
+      if (p.kind[i] == ParticleKind::dummy) reference[i] = n_fluid_i + n_other;
+      else if (roles[i] != Role::fluid) reference[i] = n_other;
     }
   }
 
@@ -636,8 +628,8 @@ struct FluidSolver::Impl {
     const std::size_t n_rows = particle_of_row.size();
     sys.col.clear();
     sys.value.clear();
-    // The first step solves for the incompressible pressure (kappa 1, the compressibility 1e-4 of the case's).
-    const Real compress = (initial_step() ? 1e-4 : 1.0) / (c * c * dt * dt);
+    // The first step solves for the incompressible pressure (kappa 1, start_compressibility of the case's).
+    const Real compress = (initial_step() ? start_compressibility : 1.0) / (c * c * dt * dt);
     const Real source = (initial_step() ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
     projection_source = source;
     const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + compress;
@@ -699,7 +691,7 @@ struct FluidSolver::Impl {
   }
 
   /// The projection's first step (the start from rest), whose system is the incompressible one: kappa 1, the
-  /// compressibility 1e-4 of the case's, stabilisation start_alpha.
+  /// compressibility start_compressibility of the case's, stabilisation start_alpha.
   bool initial_step() const { return projection && n_steps == 0; }
 
   /// The start from rest, after the first step's solve: its pressure p0 holds the fluid. Each row then gets
@@ -864,6 +856,8 @@ struct FluidSolver::Impl {
   /// force's own terms, with enough of the Laplacian to keep G's near-null pressure modes out of p0 (at 0 they
   /// put errors of up to 90 % next to the walls at dp 1 cm; docs/validation.md, ## Fluid).
   static constexpr Real start_alpha = 0.1;
+  /// The first step's compressibility, as a share of the case's 1 / c^2: nearly incompressible.
+  static constexpr Real start_compressibility = 1e-4;
   int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
   Real stabilisation = 0;         ///< alpha of fluid.projection_stabilisation
   DensityKernel kernel = DensityKernel::wendland;  ///< fluid.projection_kernel
