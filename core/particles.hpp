@@ -140,4 +140,29 @@ class ParticleSet {
   std::map<std::string, Vec> vector_defaults_;
 };
 
+/// An angular per-particle field (rotation vector, angular velocity; types.hpp's Angular): a scalar field in
+/// 2D, a vector field in 3D. Registers it like add_scalar_field / add_vector_field (idempotent).
+inline std::vector<Angular>& add_angular_field(ParticleSet& p, const std::string& name) {
+#if MPSFSI_DIM == 2
+  return p.add_scalar_field(name);
+#else
+  return p.add_vector_field(name);
+#endif
+}
+/// The registered angular field `name`; throws std::out_of_range naming it if it does not exist.
+inline std::vector<Angular>& angular_field(ParticleSet& p, const std::string& name) {
+#if MPSFSI_DIM == 2
+  return p.scalar_field(name);
+#else
+  return p.vector_field(name);
+#endif
+}
+inline const std::vector<Angular>& angular_field(const ParticleSet& p, const std::string& name) {
+#if MPSFSI_DIM == 2
+  return p.scalar_field(name);
+#else
+  return p.vector_field(name);
+#endif
+}
+
 }  // namespace mpsfsi

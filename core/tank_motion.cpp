@@ -185,6 +185,14 @@ Vec TankMotion::velocity_at(const Vec& x, const Real omega) const {
 }
 #endif
 
+#if MPSFSI_DIM == 2
+Rotation TankMotion::rotation_at(const Real theta) const { return Rotation(theta); }
+Angular TankMotion::spin(const Real omega) const { return omega; }
+#else
+Rotation TankMotion::rotation_at(const Real theta) const { return Rotation::about_axis(params_.axis, theta); }
+Angular TankMotion::spin(const Real omega) const { return omega * params_.axis.normalized(); }
+#endif
+
 Vec TankMotion::place(const Vec& x0, const Real theta) const { return params_.pivot + matrix(theta) * (x0 - params_.pivot); }
 
 Vec TankMotion::to_tank_frame(const Vec& x, const Real theta) const {

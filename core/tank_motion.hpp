@@ -9,6 +9,7 @@
 // which the case parser uses for every table a case names.
 #pragma once
 
+#include "core/rotation.hpp"
 #include "core/types.hpp"
 
 #include <cstdint>
@@ -115,6 +116,10 @@ class TankMotion {
 #endif
   /// Rotation matrix R(theta) about the roll axis.
   Mat matrix(Real theta) const;
+  /// The tank's rotation at angle theta (about e_z in 2D, the roll axis in 3D).
+  Rotation rotation_at(Real theta) const;
+  /// The angular velocity omega e of the tank at rate omega (e = e_z in 2D, the roll axis in 3D).
+  Angular spin(Real omega) const;
   /// Where a point x0 of the tank at rest is at angle theta: pivot + R(theta) (x0 - pivot).
   Vec place(const Vec& x0, Real theta) const;
   /// Velocity of the tank point now at x, rotating with omega about the pivot: omega e x (x - pivot),

@@ -36,6 +36,18 @@ using LocalIndex = std::int32_t;
 /// in 2D, a vector in 3D.
 using Angular = std::conditional_t<dim == 2, Real, Vec>;
 
+/// Components of an angular quantity (1 in 2D, 3 in 3D).
+inline constexpr int n_angular = dim == 2 ? 1 : 3;
+/// The zero angular quantity (Eigen's fixed-size vectors are not zeroed by value-initialisation), and the
+/// components of one as contiguous reals (for packing and reductions).
+#if MPSFSI_DIM == 2
+inline constexpr Real angular_zero() { return 0; }
+inline Real* angular_data(Real& a) { return &a; }
+#else
+inline Vec angular_zero() { return Vec::Zero(); }
+inline Real* angular_data(Vec& a) { return a.data(); }
+#endif
+
 /// Cross product a x b: in 2D its z component a_x b_y - a_y b_x (a scalar), in 3D the vector.
 #if MPSFSI_DIM == 2
 inline Real cross(const Vec& a, const Vec& b) { return a[0] * b[1] - a[1] * b[0]; }

@@ -15,7 +15,7 @@
 
 namespace mpsfsi {
 
-static_assert(dim == 2, "mpsfsi: fluid/ is 2D only; MPSFSI_DIM=3 builds core/ alone");
+
 
 /// The particle fields the fluid writes that others read (the coupling, the probes, the output): declared
 /// here once, used by name everywhere.

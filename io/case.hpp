@@ -21,10 +21,6 @@
 
 namespace mpsfsi {
 
-// io/, fluid/, solid/, coupling/ and app/ are 2D only (2-component vectors in the case file, 2D rotations);
-// only core/ is dimension-generic. CMake builds them only for MPSFSI_DIM=2.
-static_assert(dim == 2, "mpsfsi: io, fluid, solid, coupling and app are 2D only; MPSFSI_DIM=3 builds core/ alone");
-
 /// An error in user input (case file or command line). Exit code 2.
 class CaseError : public std::runtime_error {
  public:
@@ -40,7 +36,7 @@ struct BodySpec {
   Rect rect;                        ///< region filled with particles
   std::optional<Rect> clamp;        ///< solid only: particles inside are clamped
   Vec velocity = Vec::Zero();       ///< initial velocity [m/s]
-  Real angular_velocity = 0;        ///< initial angular velocity about the body's centroid [rad/s]
+  Angular angular_velocity = angular_zero();       ///< initial angular velocity about the body's centroid [rad/s] (a vector in 3D)
 };
 
 /// The part of a body that is not clamped: a clamp that spans the body's whole width (height) cuts its

@@ -742,9 +742,16 @@ void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::stri
     b.velocity = r.vec("velocity", Vec::Zero(), "an initial velocity [vx, vy] in m/s");
     if (!(b.velocity.norm() <= max_speed))
       src.expected(r.at("velocity"), fmt::format("an initial velocity [vx, vy] in m/s of magnitude at most {:g} m/s", max_speed));
+#if MPSFSI_DIM == 2
     b.angular_velocity = r.number("angular_velocity", 0, magnitude_at_most(max_angular_velocity),
                                   fmt::format("a number in [-{0:g}, {0:g}] (initial angular velocity) [rad/s]",
                                               max_angular_velocity));
+#else
+    b.angular_velocity = r.vec("angular_velocity", Vec::Zero(), "an initial angular velocity [wx, wy, wz] in rad/s");
+    if (!(b.angular_velocity.norm() <= max_angular_velocity))
+      src.expected(r.at("angular_velocity"), fmt::format("an initial angular velocity [wx, wy, wz] in rad/s of magnitude "
+                                                         "at most {:g} rad/s", max_angular_velocity));
+#endif
     r.finish();
     g.body_rect.push_back(r.at("rectangle"));
     g.body_material.push_back(r.at("material"));

@@ -44,8 +44,8 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   for (const auto& x : points) {
     const bool clamp = is_solid && b.clamp && b.clamp->contains(x);
     const Vec r = x - centroid;
-    // Rigid motion: v = v0 + omega x r (2D: omega e_z x r = omega (-r_y, r_x)).
-    const Vec v = clamp ? Vec::Zero() : Vec(b.velocity + b.angular_velocity * Vec(-r[1], r[0]));
+    // Rigid motion: v = v0 + omega x r.
+    const Vec v = clamp ? Vec::Zero() : Vec(b.velocity + cross(b.angular_velocity, r));
     p.add(x, v, is_solid ? ParticleKind::solid : ParticleKind::fluid, body_index, material, clamp);
     count.n_clamped += clamp;
     lo = lo.cwiseMin(x);

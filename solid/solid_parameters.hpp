@@ -14,7 +14,7 @@
 
 namespace mpsfsi {
 
-static_assert(dim == 2, "mpsfsi: solid/ is 2D only; MPSFSI_DIM=3 builds core/ alone");
+
 
 /// The particle fields of the solid that the coupling reads or writes: declared here once.
 namespace solid_fields {
@@ -122,7 +122,7 @@ struct SourceSpec {
 /// The initial angular velocity of a body (bodies[].angular_velocity of the case), by body name.
 struct BodySpin {
   std::string body;
-  Real angular_velocity = 0;  ///< [rad/s]
+  Angular angular_velocity = angular_zero();  ///< [rad/s] (a vector in 3D)
 };
 
 /// Everything the solid solver (solid/solid_solver.hpp) is set up from; io/ builds it from a case

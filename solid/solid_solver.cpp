@@ -71,8 +71,32 @@ constexpr const char* n_bonds0 = "_solid_bonds0";  ///< bonds in the reference c
 constexpr const char* broken = "_solid_broken";    ///< broken bonds: bit k for the lattice offset k (offset_slot)
 constexpr const char* pn = "_solid_pn";            ///< p_i / n0_i of this step (eq. 33, 38)
 constexpr const char* label = "_solid_label";      ///< fragment label (smallest global id of the fragment)
-constexpr const char* coef[3] = {"_solid_bxx", "_solid_byy", "_solid_bxy"};  ///< corrected strain weights (B_i)
+/// Corrected strain weights: the independent entries of the symmetric B_i, the diagonal first.
+#if MPSFSI_DIM == 2
+constexpr const char* coef[] = {"_solid_bxx", "_solid_byy", "_solid_bxy"};
+#else
+constexpr const char* coef[] = {"_solid_bxx", "_solid_byy", "_solid_bzz", "_solid_bxy", "_solid_bxz", "_solid_byz"};
+#endif
 }  // namespace internal
+
+/// Entries of a symmetric dim x dim matrix: (a, b) of entry c, diagonal first (internal::coef's order).
+constexpr int n_sym = dim * (dim + 1) / 2;
+using SymVec = Eigen::Matrix<Real, n_sym, 1>;
+constexpr int sym_a[6] = {0, 1, dim == 2 ? 0 : 2, 0, 0, 1};
+constexpr int sym_b[6] = {0, 1, dim == 2 ? 1 : 2, 1, 2, 2};
+/// (e e^T)_c for each entry c, and with the off-diagonal entries doubled (e^T B e = doubled . (B_c)).
+SymVec outer_entries(const Vec& e, const Real off_diagonal) {
+  SymVec s;
+  for (int c = 0; c < n_sym; ++c) s[c] = e[sym_a[c]] * e[sym_b[c]] * (c < dim ? 1 : off_diagonal);
+  return s;
+}
+
+/// "(x, y)" or "(x, y, z)" with 6 significant digits, for messages.
+std::string show(const Vec& v) {
+  std::string s = "(";
+  for (int a = 0; a < dim; ++a) s += fmt::format("{}{:.6g}", a ? ", " : "", v[a]);
+  return s + ")";
+}
 
 }  // namespace
 
@@ -140,9 +164,9 @@ struct SolidSolver::Impl {
   std::vector<Real>* f_broken = nullptr;
   std::vector<Real>* f_pn = nullptr;
   std::vector<Real>* f_label = nullptr;
-  std::vector<Real>* f_coef[3] = {nullptr, nullptr, nullptr};
-  std::vector<Real>* f_theta = nullptr;
-  std::vector<Real>* f_omega = nullptr;
+  std::vector<Real>* f_coef[n_sym] = {};
+  std::vector<Angular>* f_theta = nullptr;  ///< rotation vector (the angle in 2D)
+  std::vector<Angular>* f_omega = nullptr;
   std::vector<Real>* f_von_mises = nullptr;
   std::vector<Real>* f_pressure = nullptr;
   std::vector<Real>* f_fragment = nullptr;
@@ -154,7 +178,7 @@ struct SolidSolver::Impl {
   std::vector<GlobalId> seen_gid;  ///< global ids of the set at the last renewal (owned, then ghosts)
   std::size_t seen_owned = 0;
   /// Solid particles held here, in order of local index: the owned ones first (k < n(): solid index k of the
-  /// bonds and per-owned arrays), then the ghosts (contact candidates, half angles).
+  /// bonds and per-owned arrays), then the ghosts (contact candidates, rotations).
   std::vector<LocalIndex> local;
   std::size_t n_own = 0;
   // Bonds of each owned solid particle k (both directions: every rank computes its own particles' forces),
@@ -171,8 +195,13 @@ struct SolidSolver::Impl {
   std::vector<Angular> torque;
   std::vector<Real> tr;
   std::vector<std::uint8_t> new_surface;
-  // Per local particle (size of the set).
+  // Per local particle (size of the set): its rotation, as cos and sin of half the angle in 2D, a unit
+  // quaternion in 3D.
+#if MPSFSI_DIM == 2
   std::vector<Real> ch, sh;
+#else
+  std::vector<Eigen::Quaternion<Real>> q_rot;
+#endif
   std::vector<Load> loads;
   std::vector<Source> sources;
   // Contact scratch.
@@ -223,17 +252,27 @@ struct SolidSolver::Impl {
   bool set_changed() const;
   /// Owned and local solid lists, bonds, load and source members from the particle set.
   void renew_structure();
-  void compute_half_angles();
-  /// Relative displacement u_ij = r_ij - R((theta_i + theta_j)/2) r0_ij (eq. 25) and r_ij of bond b of owned
-  /// particle i. Every operation is symmetric (cos, sin of the mean angle) or odd (r, r0) in the exchange of i
-  /// and j, so the other end computes exactly -u_ij and -r_ij, bit for bit.
+  void compute_rotations();
+  /// Relative displacement u_ij = r_ij - R_ij r0_ij (eq. 25) and r_ij of bond b of owned particle i, R_ij the
+  /// pair's mean rotation: R((theta_i + theta_j)/2) in 2D, in 3D the geodesic midpoint of the two rotations,
+  /// the unit quaternion (q_i + q_j) / |q_i + q_j| (q_j's sign chosen so that q_i . q_j >= 0), which is
+  /// R((theta_i + theta_j)/2) for rotations about one axis. Every operation is symmetric (the mean rotation) or
+  /// odd (r, r0) in the exchange of i and j, so the other end computes exactly -u_ij and -r_ij, bit for bit.
   void bond_state(const std::size_t i, const std::size_t b, Vec& r, Vec& u) const {
     const auto j = static_cast<std::size_t>(b_j[b]);
-    const Real cs = ch[i] * ch[j] - sh[i] * sh[j];  // cos((theta_i + theta_j)/2)
-    const Real sn = sh[i] * ch[j] + ch[i] * sh[j];  // sin((theta_i + theta_j)/2)
     const Vec r0 = b_r0[b];
     r = p.position[j] - p.position[i];
+#if MPSFSI_DIM == 2
+    const Real cs = ch[i] * ch[j] - sh[i] * sh[j];  // cos((theta_i + theta_j)/2)
+    const Real sn = sh[i] * ch[j] + ch[i] * sh[j];  // sin((theta_i + theta_j)/2)
     u = Vec(r[0] - (cs * r0[0] - sn * r0[1]), r[1] - (sn * r0[0] + cs * r0[1]));
+#else
+    const auto& qi = q_rot[i].coeffs();
+    const auto& qj = q_rot[j].coeffs();
+    const Eigen::Matrix<Real, 4, 1> sum = qi.dot(qj) >= 0 ? Eigen::Matrix<Real, 4, 1>(qi + qj) : Eigen::Matrix<Real, 4, 1>(qi - qj);
+    const Eigen::Quaternion<Real> mean(Eigen::Matrix<Real, 4, 1>(sum / sum.norm()));
+    u = r - mean * r0;
+#endif
   }
   /// Call f(k, i, j, b, r_ij, u_ij) for every intact bond of every owned solid particle.
   template <class F>
@@ -300,9 +339,9 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
   f_pn = &p.add_scalar_field(internal::pn);
   f_label = &p.add_scalar_field(internal::label);
   if (corrected)
-    for (int c = 0; c < 3; ++c) f_coef[c] = &p.add_scalar_field(internal::coef[c]);
-  f_theta = &p.add_scalar_field("rotation");
-  f_omega = &p.add_scalar_field("angular_velocity");
+    for (int c = 0; c < n_sym; ++c) f_coef[c] = &p.add_scalar_field(internal::coef[c]);
+  f_theta = &add_angular_field(p, "rotation");
+  f_omega = &add_angular_field(p, "angular_velocity");
   f_von_mises = &p.add_scalar_field("von_mises");
   f_pressure = &p.add_scalar_field("solid_pressure");
   f_fragment = &p.add_scalar_field("fragment", -1);
@@ -324,7 +363,7 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
     c.lambda = lame.back().lambda;
     c.mu = lame.back().mu;
     c.mass = m.rho * volume;
-    c.inertia = m.rho * volume * dp * dp / 6;  // eq. 44
+    c.inertia = m.rho * volume * dp * dp / 6;  // eq. 44; in 3D the cube's inertia tensor is this times I
     c.eps_max = m.fracture_strain ? *m.fracture_strain : std::numeric_limits<Real>::infinity();
     mat.push_back(c);
   }
@@ -359,7 +398,7 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
     const std::string& body = p.bodies[p.body[i]].name;
     for (const auto& b : setup.spins)
       if (b.body == body && !p.clamped[i]) (*f_omega)[i] = b.angular_velocity;
-    (*f_theta)[i] = 0;
+    (*f_theta)[i] = angular_zero();
   }
 
   // Reference bonds of the owned particles: neighbours within re of the same body (eq. 25, r0 and w0 fixed);
@@ -379,19 +418,17 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
     const auto i = static_cast<std::size_t>(all[q]);
     if (i >= p.n_owned()) continue;
     const auto same_body = [&](const std::size_t r) { return p.body[static_cast<std::size_t>(all[r])] == p.body[i]; };
-    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+    Eigen::Matrix<Real, n_sym, n_sym> m = Eigen::Matrix<Real, n_sym, n_sym>::Zero();
     int count = 0;
     for_each_pair(x0, nl, re, q, same_body, [&](std::size_t, const Vec& r0, Real, const Real w0) {
       n0[i] += w0;
       ++count;
       if (slot_of(r0) < 0 && error.empty())
         error = fmt::format("{}: body '{}' is not on a lattice of spacing dp = {} m (solid particles {} and a neighbour "
-                            "at ({:.6g}, {:.6g}) m): the solid's bonds follow the lattice offsets",
-                            setup.origin, p.bodies[p.body[i]].name, dp, p.global_id[i], r0[0], r0[1]);
+                            "at {} m): the solid's bonds follow the lattice offsets",
+                            setup.origin, p.bodies[p.body[i]].name, dp, p.global_id[i], show(r0));
       const Vec e = r0.normalized();
-      const Eigen::Vector3d row(e[0] * e[0], e[1] * e[1], e[0] * e[1]);      // e e^T as (xx, yy, xy)
-      const Eigen::Vector3d col(e[0] * e[0], e[1] * e[1], 2 * e[0] * e[1]);  // e^T B e = col . (Bxx, Byy, Bxy)
-      m += w0 * row * col.transpose();
+      m += w0 * outer_entries(e, 1) * outer_entries(e, 2).transpose();  // e e^T by entry; e^T B e = col . B
     });
     (*f_bonds0)[i] = count;
     n_max_local = std::max(n_max_local, n0[i]);
@@ -401,11 +438,12 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
     if (corrected) {
       // B_i with sum_j w0 (e0^T B_i e0) e0 e0^T = I over i's bonds; too few bond directions (a particle with
       // bonds along one line): NaN, eq. 30 is kept.
-      const Eigen::FullPivLU<Eigen::Matrix3d> lu(m);
-      const bool ok = lu.rank() == 3 && std::abs(lu.determinant()) > 1e-9 * std::pow(m.norm(), 3);
-      const Eigen::Vector3d coef = ok ? Eigen::Vector3d(lu.solve(Eigen::Vector3d(1, 1, 0)))
-                                      : Eigen::Vector3d::Constant(std::numeric_limits<Real>::quiet_NaN());
-      for (int c = 0; c < 3; ++c) (*f_coef[c])[i] = coef[c];
+      const Eigen::FullPivLU<Eigen::Matrix<Real, n_sym, n_sym>> lu(m);
+      const bool ok = lu.rank() == n_sym && std::abs(lu.determinant()) > 1e-9 * std::pow(m.norm(), n_sym);
+      SymVec identity = SymVec::Zero();
+      identity.head(dim).setOnes();
+      const SymVec coef = ok ? SymVec(lu.solve(identity)) : SymVec::Constant(std::numeric_limits<Real>::quiet_NaN());
+      for (int c = 0; c < n_sym; ++c) (*f_coef[c])[i] = coef[c];
     }
   }
   error = agreed(error);
@@ -555,7 +593,10 @@ void SolidSolver::Impl::renew_structure() {
       Real vi = dim * inv_n0_i * w0 / len;
       if (corrected && !std::isnan((*f_coef[0])[i])) {
         const Vec e = r0 / len;
-        vi = w0 / len * ((*f_coef[0])[i] * e[0] * e[0] + (*f_coef[1])[i] * e[1] * e[1] + 2 * (*f_coef[2])[i] * e[0] * e[1]);
+        const SymVec col = outer_entries(e, 2);
+        vi = 0;
+        for (int c = 0; c < n_sym; ++c) vi += (*f_coef[c])[i] * col[c];
+        vi *= w0 / len;
       }
       b_vi.push_back(vi);
     }
@@ -577,11 +618,15 @@ void SolidSolver::Impl::renew_structure() {
   b_intact.assign(b_j.size(), 1);
   b_ce.assign(b_j.size(), 0);
   force.assign(ns, Vec::Zero());
-  torque.assign(ns, Angular{});
+  torque.assign(ns, angular_zero());
   tr.assign(ns, 0);
   new_surface.assign(ns, 0);
+#if MPSFSI_DIM == 2
   ch.assign(p.size(), 1);
   sh.assign(p.size(), 0);
+#else
+  q_rot.assign(p.size(), Eigen::Quaternion<Real>::Identity());
+#endif
   // Loads and sources: members among the owned particles.
   for (auto& load : loads) {
     load.members.clear();
@@ -600,11 +645,15 @@ void SolidSolver::Impl::renew_structure() {
   }
 }
 
-void SolidSolver::Impl::compute_half_angles() {
+void SolidSolver::Impl::compute_rotations() {
   for (const LocalIndex li : local) {
     const auto i = static_cast<std::size_t>(li);
+#if MPSFSI_DIM == 2
     ch[i] = std::cos(0.5 * (*f_theta)[i]);
     sh[i] = std::sin(0.5 * (*f_theta)[i]);
+#else
+    q_rot[i] = Rotation::from_vector((*f_theta)[i]).quaternion();
+#endif
   }
 }
 
@@ -632,11 +681,11 @@ void SolidSolver::Impl::contact_forces(std::size_t& n_contacts) {
     const Vec cells = (hi - lo) / dp + Vec::Ones();
     if (!finite)
       error = "solid: a surface particle has a non-finite position; the run went unstable (reduce dt)";
-    else if (cells[0] * cells[1] > 16.0 * static_cast<Real>(s_x.size()) + 4e6)
+    else if (cells.prod() > 16.0 * static_cast<Real>(s_x.size()) + 4e6)
       error = fmt::format(
-          "solid: the surface particles spread over {:.3g} x {:.3g} m ({:.3g} contact cells of side dp for {} particles); "
+          "solid: the surface particles spread over a box of sides {} m ({:.3g} contact cells of side dp for {} particles); "
           "the run went unstable (reduce dt) or fragments flew too far apart (shrink the domain)",
-          hi[0] - lo[0], hi[1] - lo[1], cells[0] * cells[1], s_x.size());
+          show(hi - lo), cells.prod(), s_x.size());
   }
   if (!error.empty()) throw std::runtime_error(error);
   if (s_x.size() < 2) return;
@@ -664,7 +713,7 @@ void SolidSolver::Impl::contact_forces(std::size_t& n_contacts) {
       const Real d = r.norm();
       // Direction: along r; for coincident particles fall back to the reference direction.
       Vec e = d > 1e-12 * dp ? Vec(r / d) : Vec((*f_x0)[c] - (*f_x0)[a]);
-      if (d <= 1e-12 * dp) e = e.norm() > 0 ? Vec(e.normalized()) : Vec(1, 0);
+      if (d <= 1e-12 * dp) e = e.norm() > 0 ? Vec(e.normalized()) : Vec(Vec::UnitX());
       // Repulsion k (l0 - d) l0/d: linear near contact, stiffening without bound as d -> 0.
       const Real mag = k_contact * (dp - d) * dp / std::max(d, d_min);
       force[k] -= (i_first ? mag : -mag) * e;
@@ -675,10 +724,10 @@ void SolidSolver::Impl::contact_forces(std::size_t& n_contacts) {
 
 SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   sync();
-  compute_half_angles();
+  compute_rotations();
   const std::size_t ns = n();
   std::fill(force.begin(), force.end(), Vec::Zero());
-  std::fill(torque.begin(), torque.end(), Angular{});
+  std::fill(torque.begin(), torque.end(), angular_zero());
   std::fill(tr.begin(), tr.end(), 0.0);
   std::fill(new_surface.begin(), new_surface.end(), 0);
   unsigned long long counts[2] = {0, 0};  // bonds broken in this step, contacts
@@ -692,7 +741,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     const auto i = static_cast<std::size_t>(local[k]);
     const Real eps_max = material_of(i).eps_max;
     Vec fi = Vec::Zero();
-    Angular ti{};
+    Angular ti = angular_zero();
     Real tri = 0;
     bool broke = false;
     for (std::size_t b = b_off[k]; b < b_off[k + 1]; ++b) {
@@ -786,15 +835,15 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     if (p.clamped[i]) {
       p.position[i] = tank.place((*f_x0)[i], tank_theta);
       p.velocity[i] = tank.velocity_at(p.position[i], tank_omega);
-      (*f_theta)[i] = Rotation(tank_theta).angle();
-      (*f_omega)[i] = tank_omega;
+      (*f_theta)[i] = tank.rotation_at(tank_theta).log();
+      (*f_omega)[i] = tank.spin(tank_omega);
       continue;
     }
     const MaterialConstants& m = material_of(i);
     p.velocity[i] += (dt / m.mass) * force[k];
     p.position[i] += dt * p.velocity[i];
     (*f_omega)[i] += (dt / m.inertia) * torque[k];
-    (*f_theta)[i] = (Rotation::from_vector(dt * (*f_omega)[i]) * Rotation((*f_theta)[i])).angle();  // eq. 46
+    (*f_theta)[i] = (Rotation::from_vector(dt * (*f_omega)[i]) * Rotation::from_vector((*f_theta)[i])).log();  // eq. 46
     v2_max = std::max(v2_max, p.velocity[i].squaredNorm());
   }
   // The step's totals in one collective (a sub-step does little work between its collectives): bonds broken
@@ -921,7 +970,7 @@ void SolidSolver::load_state(BinaryReader& in) {
 void SolidSolver::prepare_output(const Real t) {
   Impl& m = *impl_;
   m.compute_fragments();  // (renews owners, ghosts and bonds first)
-  m.compute_half_angles();
+  m.compute_rotations();
   const std::size_t ns = m.n();
   // Strain tensor eps_i = sym(d/n0_i sum w0/|r0| u_ij (x) e_ij): its trace is eq. 30.
   std::vector<Mat> grad(ns, Mat::Zero());
@@ -975,10 +1024,16 @@ void SolidSolver::prepare_output(const Real t) {
     const Mat eps = 0.5 * (g + g.transpose());
     const Real tr_eps = eps.trace();
     const Mat sigma = 2 * mc.mu * eps + mc.lambda * tr_eps * Mat::Identity();
-    const Real szz = m.plane_stress ? 0.0 : mc.lambda * tr_eps;
-    const Real sxx = sigma(0, 0), syy = sigma(1, 1), sxy = sigma(0, 1);
+#if MPSFSI_DIM == 2
+    const Real szz = m.plane_stress ? 0.0 : mc.lambda * tr_eps;  // out of plane: plane stress, plane strain
+    const Real shear2 = sigma(0, 1) * sigma(0, 1);
+#else
+    const Real szz = sigma(2, 2);
+    const Real shear2 = sigma(0, 1) * sigma(0, 1) + sigma(0, 2) * sigma(0, 2) + sigma(1, 2) * sigma(1, 2);
+#endif
+    const Real sxx = sigma(0, 0), syy = sigma(1, 1);
     (*m.f_von_mises)[i] = std::sqrt(0.5 * ((sxx - syy) * (sxx - syy) + (syy - szz) * (syy - szz) + (szz - sxx) * (szz - sxx)) +
-                                    3 * sxy * sxy);
+                                    3 * shear2);
     (*m.f_pressure)[i] = -mc.lambda * tr_eps;
     (*m.f_displacement)[i] = m.p.position[i] - (*m.f_x0)[i];
     (*m.f_fragment)[i] = number[static_cast<GlobalId>((*m.f_label)[i])];
@@ -989,13 +1044,16 @@ void SolidSolver::prepare_output(const Real t) {
   const std::string path = m.out_dir + "/fragments.csv";
   std::ofstream out(path, m.csv_started ? std::ios::app : std::ios::trunc);
   check_written(out, path, "fragment table");
-  if (!m.csv_started) out << "time,n_fragments,fragment,body,particles,mass,centroid_x,centroid_y\n";
+  if (!m.csv_started) out << (dim == 2 ? "time,n_fragments,fragment,body,particles,mass,centroid_x,centroid_y\n"
+                                        : "time,n_fragments,fragment,body,particles,mass,centroid_x,centroid_y,centroid_z\n");
   m.csv_started = true;
   for (std::size_t f = 0; f < order.size(); ++f) {
     const auto& s = order[f].second;
     const Vec c = s.mx / s.mass;
-    out << fmt::format("{:.9g},{},{},{},{},{:.9g},{:.9g},{:.9g}\n", t, m.n_frag, f,
-                       m.p.bodies[static_cast<std::size_t>(s.body)].name, static_cast<std::size_t>(s.count), s.mass, c[0], c[1]);
+    out << fmt::format("{:.9g},{},{},{},{},{:.9g}", t, m.n_frag, f, m.p.bodies[static_cast<std::size_t>(s.body)].name,
+                       static_cast<std::size_t>(s.count), s.mass);
+    for (int a = 0; a < dim; ++a) out << fmt::format(",{:.9g}", c[a]);
+    out << "\n";
   }
   out.flush();
   check_written(out, path, "fragment table");
@@ -1004,7 +1062,7 @@ void SolidSolver::prepare_output(const Real t) {
 SolidDiagnostics SolidSolver::diagnostics() const {
   Impl& m = *impl_;
   m.sync();
-  m.compute_half_angles();
+  m.compute_rotations();
   SolidDiagnostics d;
   const std::size_t ns = m.n();
   std::vector<Real> tr(ns, 0);
@@ -1019,12 +1077,16 @@ SolidDiagnostics SolidSolver::diagnostics() const {
     const Impl::MaterialConstants& mc = m.material_of(i);
     const Vec& x = m.p.position[i];
     const Vec& v = m.p.velocity[i];
-    const Real omega = (*m.f_omega)[i];
+    const Angular omega = (*m.f_omega)[i];
     d.strain += 0.5 * m.volume * mc.lambda * tr[k] * tr[k];
     d.momentum += mc.mass * v;
     d.angular_momentum += mc.mass * cross(x, v) + mc.inertia * omega;
     d.kinetic += 0.5 * mc.mass * v.squaredNorm();
+#if MPSFSI_DIM == 2
     d.rotational += 0.5 * mc.inertia * omega * omega;
+#else
+    d.rotational += 0.5 * mc.inertia * omega.squaredNorm();
+#endif
     // Contact energy: U(d) = k l0 (l0 ln(l0/d) - (l0 - d)) for unbonded surface pairs closer than l0, half at each end.
     if (surface[i] == 0) continue;
     for (const LocalIndex lj : m.local) {
@@ -1035,20 +1097,23 @@ SolidDiagnostics SolidSolver::diagnostics() const {
       d.contact += 0.5 * m.k_contact * m.dp * (m.dp * std::log(m.dp / dist) - (m.dp - dist));
     }
   }
-  Real sums[dim + 5];
+  constexpr int n_ang = n_angular;
+  constexpr int o = dim + n_ang;
+  Real sums[o + 4];
+  Real* const ang = angular_data(d.angular_momentum);
   for (int a = 0; a < dim; ++a) sums[a] = d.momentum[a];
-  sums[dim] = d.angular_momentum;
-  sums[dim + 1] = d.kinetic;
-  sums[dim + 2] = d.rotational;
-  sums[dim + 3] = d.strain;
-  sums[dim + 4] = d.contact;
-  m.allreduce(sums, dim + 5, MPI_DOUBLE, MPI_SUM);
+  for (int a = 0; a < n_ang; ++a) sums[dim + a] = ang[a];
+  sums[o] = d.kinetic;
+  sums[o + 1] = d.rotational;
+  sums[o + 2] = d.strain;
+  sums[o + 3] = d.contact;
+  m.allreduce(sums, o + 4, MPI_DOUBLE, MPI_SUM);
   for (int a = 0; a < dim; ++a) d.momentum[a] = sums[a];
-  d.angular_momentum = sums[dim];
-  d.kinetic = sums[dim + 1];
-  d.rotational = sums[dim + 2];
-  d.strain = sums[dim + 3];
-  d.contact = sums[dim + 4];
+  for (int a = 0; a < n_ang; ++a) ang[a] = sums[dim + a];
+  d.kinetic = sums[o];
+  d.rotational = sums[o + 1];
+  d.strain = sums[o + 2];
+  d.contact = sums[o + 3];
   return d;
 }
 

@@ -38,7 +38,7 @@ struct SolidStepReport {
 /// Conserved quantities of the solid particles (per unit thickness), for tests and logs.
 struct SolidDiagnostics {
   Vec momentum = Vec::Zero();   ///< sum m v [kg m/s]
-  Real angular_momentum = 0;    ///< sum m (x cross v) + I omega, about the origin [kg m2/s]
+  Angular angular_momentum = angular_zero();  ///< sum m (x cross v) + I omega, about the origin [kg m2/s] (a vector in 3D)
   Real kinetic = 0;             ///< sum m v^2 / 2 [J]
   Real rotational = 0;          ///< sum I omega^2 / 2 [J]
   Real strain = 0;              ///< bond energy + volumetric energy (the potential of eq. 36-38, 43) [J]

@@ -17,7 +17,7 @@ inline CaseSpec base_case(const Real dp, const Real half_width = 100) {
   spec.file = "test";
   spec.name = "test";
   spec.dp = dp;
-  spec.domain = {Vec(-half_width, -half_width), Vec(half_width, half_width)};
+  spec.domain = {Vec::Constant(-half_width), Vec::Constant(half_width)};
   return spec;
 }
 
@@ -51,19 +51,24 @@ inline BodySpec solid_body(const std::string& name, const std::string& mat, cons
   return b;
 }
 
-/// A brittle bar of 20 x 5 particles (dp 1 cm, 0.2 x 0.05 m, fracture strain 0.05)...
+/// A brittle bar of 20 x 5 (x 5) particles (dp 1 cm, 0.2 x 0.05 (x 0.05) m, fracture strain 0.05)...
 inline CaseSpec brittle_bar_case() {
   CaseSpec spec = base_case(0.01);
   SolidMaterial m = material("glass", 1000, 1e6, 0.3);
   m.fracture_strain = 0.05;
   spec.solid_materials.push_back(m);
-  spec.bodies.push_back(solid_body("bar", "glass", Vec(0, 0), Vec(0.2, 0.05)));
+  Vec hi = Vec::Constant(0.05);
+  hi[0] = 0.2;
+  spec.bodies.push_back(solid_body("bar", "glass", Vec::Zero(), hi));
   return spec;
 }
 
 /// ... and its halves pulled apart at x = 0.1 m (5 m/s each way).
 inline void pull_bar_apart(ParticleSet& p) {
-  for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] = Vec(p.position[i][0] < 0.1 ? -5.0 : 5.0, 0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.velocity[i] = Vec::Zero();
+    p.velocity[i][0] = p.position[i][0] < 0.1 ? -5.0 : 5.0;
+  }
 }
 
 }  // namespace mpsfsi::test
