@@ -13,8 +13,7 @@
 
 namespace mpsfsi {
 
-/// Spatial dimension d of the build (seed 004 uses d in eq. 9-12). CMake accepts 2 or 3; only core/
-/// is dimension-generic, the other modules assert dim == 2 in their headers (see io/case.hpp, fluid/fluid_parameters.hpp, solid/solid_parameters.hpp).
+/// Spatial dimension d of the build (seed 004 uses d in eq. 9-12). CMake accepts 2 or 3.
 inline constexpr int dim = MPSFSI_DIM;
 static_assert(dim == 2 || dim == 3, "mpsfsi: MPSFSI_DIM must be 2 or 3");
 

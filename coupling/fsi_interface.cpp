@@ -259,7 +259,7 @@ void FsiInterface::open_csv(const std::string& path, const bool append) {
   csv_.open(path, append ? std::ios::app : std::ios::trunc);
   csv_path_ = path;
   check_written(csv_, csv_path_, "interface table");
-  if (!append) csv_ << "time,body,fx,fy,work_step,work_total,wetted\n";
+  if (!append) csv_ << (dim == 2 ? "time,body,fx,fy,work_step,work_total,wetted\n" : "time,body,fx,fy,fz,work_step,work_total,wetted\n");
 }
 
 void FsiInterface::save_state(BinaryWriter& out) const {
@@ -296,8 +296,11 @@ void FsiInterface::load_state(BinaryReader& in) {
 void FsiInterface::write_csv(const Real t) {
   if (!csv_.is_open()) return;
   for (const auto& b : bodies_)
-    csv_ << fmt::format("{:.9g},{},{:.9g},{:.9g},{:.9g},{:.9g},{}\n", t, b.name, b.force[0], b.force[1], b.work_step,
-                        b.work_total, b.n_wetted);
+  {
+    csv_ << fmt::format("{:.9g},{}", t, b.name);
+    for (int a = 0; a < dim; ++a) csv_ << fmt::format(",{:.9g}", b.force[a]);
+    csv_ << fmt::format(",{:.9g},{:.9g},{}\n", b.work_step, b.work_total, b.n_wetted);
+  }
   csv_.flush();
   check_written(csv_, csv_path_, "interface table");
 }

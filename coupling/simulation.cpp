@@ -10,6 +10,7 @@
 
 #include "core/distribution.hpp"
 #include "core/files.hpp"
+#include "core/text.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/fsi_interface.hpp"
 #include "coupling/rank0.hpp"
@@ -312,8 +313,8 @@ class RunLoop {
   void check_state(const std::size_t step, const Real t) const {
     for (std::size_t i = 0; i < p_.n_owned(); ++i) {
       const auto where = [&] {
-        return fmt::format("particle {} ({} of body '{}') at ({:.6g}, {:.6g})", p_.global_id[i], to_string(p_.kind[i]),
-                           p_.bodies[p_.body[i]].name, p_.position[i][0], p_.position[i][1]);
+        return fmt::format("particle {} ({} of body '{}') at {}", p_.global_id[i], to_string(p_.kind[i]),
+                           p_.bodies[p_.body[i]].name, show_point(p_.position[i]));
       };
       if (!p_.position[i].allFinite() || !p_.velocity[i].allFinite())
         throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} has a non-finite position or velocity; the run went "
@@ -331,9 +332,8 @@ class RunLoop {
                                        "{:.4g} m/s of its material: runaway velocity (reduce the solid dt)",
                                        step, t, where(), speed, limits_.solid[m]));
         if (!spec_.domain.contains(p_.position[i]))
-          throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} left the domain [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}]",
-                                       step, t, where(), spec_.domain.lo[0], spec_.domain.hi[0], spec_.domain.lo[1],
-                                       spec_.domain.hi[1]));
+          throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} left the domain {}", step, t, where(),
+                                       show_box(spec_.domain)));
       }
     }
   }
@@ -373,11 +373,11 @@ class RunLoop {
       if (share > spec_.fluid.max_loss)
         throw RunFailure(fmt::format(
             "step {} (t = {:.6g} s): {} of the {} particles ({:.1f} %) of fluid body '{}' have left the domain "
-            "[{:.4g}, {:.4g}] x [{:.4g}, {:.4g}], more than fluid.max_loss = {:g} %; the fluid fell or was flung out "
+            "{}, more than fluid.max_loss = {:g} %; the fluid fell or was flung out "
             "(dt {:.3g} s limited by {}: check time.dt_max, time.cfl and the gravity, and that the walls hold the "
             "fluid)",
-            step, t, lost, initial_fluid_[b], 100 * share, p_.bodies[b].name, spec_.domain.lo[0], spec_.domain.hi[0],
-            spec_.domain.lo[1], spec_.domain.hi[1], 100 * spec_.fluid.max_loss, last_fluid_.dt, step_limit_));
+            step, t, lost, initial_fluid_[b], 100 * share, p_.bodies[b].name, show_box(spec_.domain),
+            100 * spec_.fluid.max_loss, last_fluid_.dt, step_limit_));
     }
   }
 

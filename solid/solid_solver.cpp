@@ -1,10 +1,11 @@
 // Explicit rotation-aware elastic MPS with brittle fracture and contact (seed 004 §4.2, §4.4;
 // seed 000 §2). Implements, per bond (i, j) of the reference configuration:
-//   u_ij = r_ij - R((theta_i + theta_j)/2) r0_ij                     (seed 004 eq. 25; seed 000 eq. 7-10)
+//   u_ij = r_ij - R_ij r0_ij, R_ij the pair's mean rotation            (seed 004 eq. 25; seed 000 eq. 7-10)
 //   normal / shear parts and strains, sigma = 2 mu eps, tau = 2 mu gamma   (eq. 26-29, 31-32)
 //   tr(eps)_i = d/n0_i sum u_ij . r_ij / (|r0_ij| |r_ij|) w0_ij, p_i = -lambda tr(eps)_i  (eq. 30, 33)
 //   rho dv/dt = 2d/n0 sum (sigma_ij + tau_ij)/|r0| w0 - 2d/n0 sum p_ij e_ij/|r0| w0    (eq. 36-38)
 //   I domega/dt = 1/2 sum r_ij x F_ij, F_ij the shear force, I = rho l0^(2+d)/6         (eq. 41-44)
+//   (in 3D omega and the torque are vectors and I is the cube's isotropic inertia tensor)
 //   symplectic Euler for (v, x) and (omega, theta)                                      (eq. 39-40, 45-46)
 //   a bond breaks for good when its normal strain exceeds eps_max                       (eq. 47)
 //   surface particles: n_i < n_max - n_c, n_c = 0.5, irreversible                        (eq. 48)
@@ -23,8 +24,10 @@
 //   weighs the normal strain about half), so with a large lambda a traction-free strain is not an
 //   equilibrium of the surface rows and Rayleigh waves come out ~7 % weak. `corrected` computes tr_i with
 //   per-bond weights that make it exact for linear fields and keeps the pair form of the pressure force.
-// * cos and sin of the mean angle come from per-particle half-angle cos/sin by the addition theorem:
-//   two trig calls per particle per step instead of two per bond.
+// * 2D: cos and sin of the mean angle come from per-particle half-angle cos/sin by the addition theorem:
+//   two trig calls per particle per step instead of two per bond. 3D: each particle's rotation vector becomes
+//   a unit quaternion once per step; a bond's mean rotation is their normalised sum (the geodesic midpoint,
+//   docs/validation.md "Solid in 3D").
 // * Distributed over ranks (core/distribution.hpp): each rank advances its owned particles; a particle's bonds
 //   are stored with it (CSR, both directions) and computed at both ends with operations that are symmetric or
 //   odd in the exchange of the pair, so both ends, on one rank or two, compute the same numbers and a bond breaks
@@ -42,6 +45,7 @@
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
 #include "core/rotation.hpp"
+#include "core/text.hpp"
 #include "solid/sources.hpp"
 
 #include <Eigen/Dense>
@@ -61,6 +65,10 @@ namespace mpsfsi {
 namespace {
 
 constexpr Real n_c = 0.5;  ///< surface threshold of eq. 48
+/// solid.normalisation = mean: n0 = a n_i^0 + (1 - a) n0_lattice. A face row parallel to a uniaxial stress
+/// has the axial stiffness of an interior row for a = 0.46 in 2D (taken as 1/2) and a = 0.585 on a face,
+/// 0.600 on an edge in 3D (re = 2.1; docs/validation.md, "Solid in 3D").
+constexpr Real surface_blend = dim == 2 ? 0.5 : 0.6;
 
 /// The solid's internal per-particle fields (names starting with '_' are not written unless asked for). They
 /// travel with a particle between ranks and into checkpoints: everything the solid knows of a particle.
@@ -89,13 +97,6 @@ SymVec outer_entries(const Vec& e, const Real off_diagonal) {
   SymVec s;
   for (int c = 0; c < n_sym; ++c) s[c] = e[sym_a[c]] * e[sym_b[c]] * (c < dim ? 1 : off_diagonal);
   return s;
-}
-
-/// "(x, y)" or "(x, y, z)" with 6 significant digits, for messages.
-std::string show(const Vec& v) {
-  std::string s = "(";
-  for (int a = 0; a < dim; ++a) s += fmt::format("{}{:.6g}", a ? ", " : "", v[a]);
-  return s + ")";
 }
 
 }  // namespace
@@ -426,14 +427,16 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
       if (slot_of(r0) < 0 && error.empty())
         error = fmt::format("{}: body '{}' is not on a lattice of spacing dp = {} m (solid particles {} and a neighbour "
                             "at {} m): the solid's bonds follow the lattice offsets",
-                            setup.origin, p.bodies[p.body[i]].name, dp, p.global_id[i], show(r0));
+                            setup.origin, p.bodies[p.body[i]].name, dp, p.global_id[i], show_point(r0));
       const Vec e = r0.normalized();
       m += w0 * outer_entries(e, 1) * outer_entries(e, 2).transpose();  // e e^T by entry; e^T B e = col . B
     });
     (*f_bonds0)[i] = count;
     n_max_local = std::max(n_max_local, n0[i]);
     const SolidNormalisation norm = solid.normalisation;
-    const Real n0_used = norm == SolidNormalisation::particle ? n0[i] : norm == SolidNormalisation::lattice ? n0_lattice : 0.5 * (n0[i] + n0_lattice);
+    const Real n0_used = norm == SolidNormalisation::particle  ? n0[i]
+                         : norm == SolidNormalisation::lattice ? n0_lattice
+                                                               : surface_blend * n0[i] + (1 - surface_blend) * n0_lattice;
     (*f_inv_n0)[i] = n0_used > 0 ? 1 / n0_used : 0;
     if (corrected) {
       // B_i with sum_j w0 (e0^T B_i e0) e0 e0^T = I over i's bonds; too few bond directions (a particle with
@@ -685,7 +688,7 @@ void SolidSolver::Impl::contact_forces(std::size_t& n_contacts) {
       error = fmt::format(
           "solid: the surface particles spread over a box of sides {} m ({:.3g} contact cells of side dp for {} particles); "
           "the run went unstable (reduce dt) or fragments flew too far apart (shrink the domain)",
-          show(hi - lo), cells.prod(), s_x.size());
+          show_point(hi - lo), cells.prod(), s_x.size());
   }
   if (!error.empty()) throw std::runtime_error(error);
   if (s_x.size() < 2) return;

@@ -1,7 +1,8 @@
 // Benchmark of the fluid step (seed 004 eq. 16-24) on the dam break of cases/dam_break.yaml at l0 = 1.6 mm
-// (about 16,200 fluid particles), on the ranks of mpirun with the particles distributed: milliseconds per
-// step (the slowest rank) split into neighbour search, PPE assembly, preconditioner setup, solve (with
-// iterations), halo (owners, ghosts, refreshes) and the rest; peak memory per rank; ghosts and halo bytes.
+// (about 16,200 fluid particles; the 3D build: cases/3d/dam_break.yaml at its dp), on the ranks of mpirun with
+// the particles distributed: milliseconds per step (the slowest rank) split into neighbour search, PPE
+// assembly, preconditioner setup, solve (with iterations), halo (owners, ghosts, refreshes) and the rest; peak
+// memory per rank and per particle; ghosts and halo bytes.
 // Usage: [mpirun -np R] bench_fluid_dam_break [preconditioner [n_steps [dp [extra --set overrides...]]]]
 // Results go to docs/performance.md (## Fluid).
 #include "core/distribution.hpp"
@@ -26,10 +27,11 @@ int main(int argc, char** argv) {
     MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
     const std::string prec = argc > 1 ? argv[1] : "jacobi";
     const int n_steps = argc > 2 ? std::stoi(argv[2]) : 200;
-    const std::string dp = argc > 3 ? argv[3] : "0.0016";
+    const std::string dp = argc > 3 ? argv[3] : dim == 2 ? "0.0016" : "0.01";
     std::vector<std::string> overrides = {"dp=" + dp, "fluid.preconditioner=" + prec};
     for (int k = 4; k < argc; ++k) overrides.push_back(argv[k]);
-    const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/dam_break.yaml", overrides);
+    const CaseSpec spec =
+        load_case(std::string(MPSFSI_SOURCE_DIR) + (dim == 2 ? "/cases/dam_break.yaml" : "/cases/3d/dam_break.yaml"), overrides);
     Scene scene = build_scene(spec);
     ParticleSet& p = scene.particles;
     const std::size_t n_particles = p.size(), n_fluid = p.n_of_kind(ParticleKind::fluid);
@@ -95,11 +97,12 @@ int main(int argc, char** argv) {
                  dp, n_particles, n_fluid, n_ranks, prec, spec.fluid.tolerance, n_steps, t);
       fmt::print("owners and ghosts renewed {} times in {} steps ({} partition)\n", dist.stats().n_ghost_builds, n_steps,
                  name_of(partition_method_names(), ds.method));
-      fmt::print("| ranks | particles | neighbours | assembly | prec. setup | solve (it) | halo | rest | total ms/step | peak MiB/rank | ghosts/rank | halo KiB/rank/step |\n");
-      fmt::print("| {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} ({:.1f}) | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.0f} | {:.1f} |\n", n_ranks,
+      fmt::print("| ranks | particles | neighbours | assembly | prec. setup | solve (it) | halo | rest | total ms/step | peak MiB/rank | peak KiB/particle | ghosts/rank | halo KiB/rank/step |\n");
+      fmt::print("| {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} ({:.1f}) | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.2f} | {:.0f} | {:.1f} |\n", n_ranks,
                  n_particles, phases[0] * ms, phases[1] * ms, phases[2] * ms, phases[3] * ms,
                  static_cast<double>(iterations) / n_steps, phases[4] * ms, phases[5] * ms, phases[6] * ms,
-                 static_cast<double>(peak_kib) / 1024.0, halo[1] / n_steps / n_ranks, halo[0] / n_steps / n_ranks / 1024.0);
+                 static_cast<double>(peak_kib) / 1024.0, static_cast<double>(peak_kib) * n_ranks / static_cast<double>(n_particles),
+                 halo[1] / n_steps / n_ranks, halo[0] / n_steps / n_ranks / 1024.0);
     }
   }
   MPI_Finalize();
