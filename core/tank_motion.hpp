@@ -80,6 +80,9 @@ enum class TankMotionType { none, sine_roll, table };
 struct TankMotionSpec {
   TankMotionType type = TankMotionType::none;
   Vec pivot = Vec::Zero();      ///< rotation centre [m]
+#if MPSFSI_DIM == 3
+  Vec axis = Vec::UnitZ();      ///< 3D: roll axis through the pivot, normalised (tank_motion.axis)
+#endif
   Real amplitude = 0;           ///< sine_roll: amplitude [rad] (case file in degrees)
   Real period = 1;              ///< sine_roll: period [s]
   std::string file;             ///< table: CSV of time [s], angle [deg], resolved relative to the case file
@@ -137,6 +140,9 @@ class TankMotion {
 inline TankMotion make_tank_motion(const TankMotionSpec& spec) {
   TankMotionParams q;
   q.pivot = spec.pivot;
+#if MPSFSI_DIM == 3
+  q.axis = spec.axis;
+#endif
   switch (spec.type) {
     case TankMotionType::none: return TankMotion();
     case TankMotionType::sine_roll:

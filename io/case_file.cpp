@@ -55,9 +55,12 @@ Rect free_part(const BodySpec& b) {
   Rect r = b.rect;
   if (!b.clamp) return r;
   const Rect& c = *b.clamp;
-  for (int a = 0; a < 2; ++a) {
-    const int o = 1 - a;  // the clamp spans axis o fully and cuts along axis a
-    if (c.lo[o] > r.lo[o] || c.hi[o] < r.hi[o]) continue;
+  for (int a = 0; a < dim; ++a) {
+    // The clamp cuts along axis a when it spans every other axis fully.
+    bool spans = true;
+    for (int o = 0; o < dim; ++o)
+      if (o != a && (c.lo[o] > r.lo[o] || c.hi[o] < r.hi[o])) spans = false;
+    if (!spans) continue;
     if (c.lo[a] <= r.lo[a] && c.hi[a] < r.hi[a]) r.lo[a] = std::max(r.lo[a], c.hi[a]);
     else if (c.hi[a] >= r.hi[a] && c.lo[a] > r.lo[a]) r.hi[a] = std::min(r.hi[a], c.lo[a]);
   }
@@ -423,7 +426,20 @@ Vec to_vec(const Source& src, const Field& f, const std::string& form) {
   return v;
 }
 
-std::string show_vec(const Vec& v) { return fmt::format("[{:g}, {:g}]", v[0], v[1]); }
+/// The components of a vector of the build's dimension for expected forms, each the axis name after
+/// `prefix`: "[x, y]" in 2D and "[x, y, z]" in 3D; with prefix "g": "[gx, gy]" and "[gx, gy, gz]".
+std::string components(const std::string& prefix = "") {
+  std::string s = "[";
+  for (int a = 0; a < dim; ++a) s += (a ? ", " : "") + prefix + "xyz"[a];
+  return s + "]";
+}
+
+/// A vector as "[1, 2]" (2D) or "[1, 2, 3]" (3D).
+std::string show_vec(const Vec& v) {
+  std::string s = "[";
+  for (int a = 0; a < dim; ++a) s += (a ? ", " : "") + fmt::format("{:g}", v[a]);
+  return s + "]";
+}
 
 std::string show_rect(const Rect& r) { return fmt::format("{{min: {}, max: {}}}", show_vec(r.lo), show_vec(r.hi)); }
 
@@ -482,6 +498,14 @@ class MapReader {
                               key, path_of(key), form));
     }
     src_.fail(field_, fmt::format("missing key '{}' in {}; expected: {}, {}", key, show_path(field_.path), path_of(key), form));
+  }
+
+  /// The key's value like optional(), without marking the key as known: a key read ahead of the others
+  /// (`dimension`) and asked for again later keeps its place in the list of an unknown key's message.
+  std::optional<Field> peek(const std::string& key) const {
+    const Entry* e = find(key);
+    if (e == nullptr || e->value.IsNull()) return std::nullopt;
+    return Field{e->value, path_of(key), e->key_node};
   }
 
   /// The field of a key read before (for messages of cross-checks).
@@ -601,11 +625,12 @@ class MapReader {
   Rect to_rect(const Field& f, const std::string& form) const {
     MapReader r(src_, f, form);
     Rect rect;
-    rect.lo = r.vec("min", "the lower-left corner [x, y] in metres");
-    rect.hi = r.vec("max", "the upper-right corner [x, y] in metres");
+    rect.lo = r.vec("min", std::string(dim == 2 ? "the lower-left corner " : "the lowest corner ") + components() + " in metres");
+    rect.hi = r.vec("max", std::string(dim == 2 ? "the upper-right corner " : "the highest corner ") + components() + " in metres");
     r.finish();
     if (!(rect.hi.array() > rect.lo.array()).all())
-      src_.fail(r.at("max"), fmt::format("{} = {}: expected max > min in both components", show_path(f.path), show_rect(rect)));
+      src_.fail(r.at("max"), fmt::format("{} = {}: expected max > min in {} components", show_path(f.path), show_rect(rect),
+                                                 dim == 2 ? "both" : "all three"));
     return rect;
   }
 
@@ -618,8 +643,9 @@ class MapReader {
 // ---------------------------------------------------------------------------------------------
 // The sections of a case.
 
-const std::string rect_form = "a rectangle {min: [x, y], max: [x, y]} in metres";
-const std::string point_form = "a point [x, y] in metres";
+const std::string rect_form = "a rectangle {min: " + components() + ", max: " + components() + "} in metres";
+const std::string point_form = "a point " + components() + " in metres";
+const std::string direction_form = "a non-zero direction " + components() + " of the force";
 
 /// A time step of key `key` (already read, `dt`) at least min_time_step and at most max_steps up to `end`.
 void check_time_step(MapReader& r, const std::string& key, const Real dt, const Real end) {
@@ -739,18 +765,18 @@ void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::stri
     b.material = r.name("material", "the name of a material of the body's kind");
     b.rect = r.rect("rectangle", rect_form + " filled with particles");
     b.clamp = r.optional_rect("clamp", rect_form + " (solid bodies: particles inside are clamped)");
-    b.velocity = r.vec("velocity", Vec::Zero(), "an initial velocity [vx, vy] in m/s");
+    b.velocity = r.vec("velocity", Vec::Zero(), "an initial velocity " + components("v") + " in m/s");
     if (!(b.velocity.norm() <= max_speed))
-      src.expected(r.at("velocity"), fmt::format("an initial velocity [vx, vy] in m/s of magnitude at most {:g} m/s", max_speed));
+      src.expected(r.at("velocity"), fmt::format("an initial velocity {} in m/s of magnitude at most {:g} m/s", components("v"), max_speed));
 #if MPSFSI_DIM == 2
     b.angular_velocity = r.number("angular_velocity", 0, magnitude_at_most(max_angular_velocity),
                                   fmt::format("a number in [-{0:g}, {0:g}] (initial angular velocity) [rad/s]",
                                               max_angular_velocity));
 #else
-    b.angular_velocity = r.vec("angular_velocity", Vec::Zero(), "an initial angular velocity [wx, wy, wz] in rad/s");
+    b.angular_velocity = r.vec("angular_velocity", Vec::Zero(), "an initial angular velocity " + components("w") + " in rad/s");
     if (!(b.angular_velocity.norm() <= max_angular_velocity))
-      src.expected(r.at("angular_velocity"), fmt::format("an initial angular velocity [wx, wy, wz] in rad/s of magnitude "
-                                                         "at most {:g} rad/s", max_angular_velocity));
+      src.expected(r.at("angular_velocity"), fmt::format("an initial angular velocity {} in rad/s of magnitude at most "
+                                                         "{:g} rad/s", components("w"), max_angular_velocity));
 #endif
     r.finish();
     g.body_rect.push_back(r.at("rectangle"));
@@ -785,7 +811,7 @@ bool inside(const Rect& inner, const Rect& outer) {
 /// Inside a box: within its inner rectangle; an open box does not bound the top.
 bool inside_box(const Rect& r, const WallSpec& box) {
   Rect bound = box.rect;
-  if (box.open_top) bound.hi[1] = std::numeric_limits<Real>::infinity();
+  if (box.open_top) bound.hi[dim - 1] = std::numeric_limits<Real>::infinity();
   return inside(r, bound);
 }
 
@@ -796,8 +822,8 @@ void check_geometry(const Source& src, const CaseSpec& spec, const GeometryField
   const auto check_size = [&](const Rect& r, const Field& f) {
     const Vec size = r.size();
     if (size.minCoeff() < 0.5 * spec.dp)
-      src.fail(f, fmt::format("{} = {}: expected a rectangle at least dp/2 = {:g} m wide and high (one particle)",
-                              f.path, show_rect(r), 0.5 * spec.dp));
+      src.fail(f, fmt::format("{} = {}: expected a rectangle at least dp/2 = {:g} m wide{} high (one particle)",
+                              f.path, show_rect(r), 0.5 * spec.dp, dim == 2 ? " and" : ", deep and"));
     if (size.maxCoeff() > max_cells_per_side * spec.dp)
       src.fail(f, fmt::format("{} = {}: expected at most {:g} particles along a side (dp = {:g} m)", f.path, show_rect(r),
                               max_cells_per_side, spec.dp));
@@ -808,7 +834,7 @@ void check_geometry(const Source& src, const CaseSpec& spec, const GeometryField
   Real n_particles = 0;
   for (std::size_t i = 0; i < spec.bodies.size(); ++i) {
     check_size(spec.bodies[i].rect, g.body_rect[i]);
-    n_particles += spec.bodies[i].rect.size().prod() / (spec.dp * spec.dp);
+    n_particles += spec.bodies[i].rect.size().prod() / std::pow(spec.dp, dim);
   }
   for (std::size_t i = 0; i < spec.walls.size(); ++i) check_size(spec.walls[i].rect, g.wall_rect[i]);
   if (n_particles > max_particles)
@@ -885,6 +911,17 @@ fs::path resolve(const fs::path& base_dir, const std::string& file) {
   return fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
 }
 
+#if MPSFSI_DIM == 3
+/// 3D: the roll axis through the pivot (tank_motion.axis), default e_z, normalised.
+void read_roll_axis(MapReader& r, TankMotionSpec& m) {
+  const std::string form = "a non-zero roll axis [x, y, z] through the pivot (default [0, 0, 1]; normalised)";
+  m.axis = r.vec("axis", Vec::UnitZ(), form);
+  const Real length = m.axis.norm();
+  if (!(length > 0 && std::isfinite(length))) r.source().expected(r.at("axis"), form);
+  m.axis /= length;
+}
+#endif
+
 void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
   const Source& src = r.source();
   TankMotionSpec& m = spec.tank_motion;
@@ -892,12 +929,18 @@ void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
   if (type == "sine_roll") {
     m.type = TankMotionType::sine_roll;
     m.pivot = r.vec("pivot", point_form + " (centre of the roll)");
+#if MPSFSI_DIM == 3
+    read_roll_axis(r, m);
+#endif
     m.amplitude = r.number("amplitude_deg", in_open(0, 90), "a number of degrees in (0, 90) (roll amplitude)") * pi / 180;
     m.period = r.number("period", positive, "a positive number (roll period) [s]");
     if (m.period < min_period) src.expected(r.at("period"), fmt::format("a roll period of at least {:g} s", min_period));
   } else if (type == "table") {
     m.type = TankMotionType::table;
     m.pivot = r.vec("pivot", point_form + " (centre of the roll)");
+#if MPSFSI_DIM == 3
+    read_roll_axis(r, m);
+#endif
     const std::string file = r.text("file", "the path of a CSV file of time [s], angle [deg], relative to the case file");
     const fs::path path = resolve(base_dir, file);
     m.file = path.string();
@@ -941,6 +984,11 @@ void read_lateral_walls(MapReader r, const TankMotionSpec& motion, LateralWallFr
   if (!r.field().node.IsDefined() || r.field().node.IsNull()) return;
   w.gap = r.number("gap", positive, "a positive number (distance between the front and back walls) [m]");
   if (w.gap < min_gap) r.source().expected(r.at("gap"), fmt::format("a gap of at least {:g} m (distance between the front and back walls) [m]", min_gap));
+  if (dim == 3)
+    r.source().fail(r.at("gap"), fmt::format("{} = {}: a 3D tank has its real front and back walls (give them as walls, "
+                                             "at their real distance); the lateral-wall friction is a quasi-2D model of "
+                                             "them; expected no {} in a 3D case",
+                                             r.path_of("gap"), show(r.at("gap").node), show_path(r.field().path)));
   w.model = r.option("model", w.model, lateral_wall_model_names());
   if (w.model == LateralWallModel::stokes) {
     const auto f = r.optional_number("frequency", positive, "a positive number (oscillation frequency) [Hz]");
@@ -956,17 +1004,24 @@ void read_lateral_walls(MapReader r, const TankMotionSpec& motion, LateralWallFr
   r.finish();
 }
 
+/// Particles within a radius of `r` lattice spacings: about pi r^2 in 2D, 4/3 pi r^3 in 3D; and that
+/// formula as text for messages.
+Real particles_within(const Real r) { return dim == 2 ? pi * r * r : 4.0 / 3.0 * pi * r * r * r; }
+const char* const particles_within_text = dim == 2 ? "pi re^2" : "4/3 pi re^3";
+
 /// An effective radius in units of dp, in (1, max_radius_dp]: beyond, the neighbour search and the
-/// operators would do about pi re^2 work per particle (re = 1e6: 3e12), which the message says.
+/// operators would do about pi re^2 (3D: 4/3 pi re^3) work per particle (re = 1e6: 3e12), which the message
+/// says.
 Real radius_in_dp(MapReader& r, const std::string& key, const Real fallback, const std::string& what) {
   const std::string form = fmt::format("a number in (1, {:g}] ({}, in units of dp)", max_radius_dp, what);
   const auto f = r.optional(key);
   if (!f) return fallback;
   const Real re = to_real(r.source(), *f, [](Real x) { return x > 1; }, form);
   if (re > max_radius_dp)
-    r.source().fail(*f, fmt::format("{} = {}: about pi re^2 = {:.2g} neighbours per particle; expected {} (at most about "
+    r.source().fail(*f, fmt::format("{} = {}: about {} = {:.2g} neighbours per particle; expected {} (at most about "
                                     "{:.0f} neighbours)",
-                                    f->path, show(f->node), pi * re * re, form, pi * max_radius_dp * max_radius_dp));
+                                    f->path, show(f->node), particles_within_text, particles_within(re), form,
+                                    particles_within(max_radius_dp)));
   return re;
 }
 
@@ -978,7 +1033,7 @@ Real stencil_radius(MapReader& r, const std::string& key, const Real dp) {
     r.source().fail(r.at(key), fmt::format("{} = {}: {:.3g} dp, about {:.2g} particles in the stencil; expected a radius "
                                            "of at most {:g} dp = {:g} m (dp = {:g} m)",
                                            r.path_of(key), show(r.at(key).node), radius / dp,
-                                           pi * radius * radius / (dp * dp), max_stencil_dp, max_stencil_dp * dp, dp));
+                                           particles_within(radius / dp), max_stencil_dp, max_stencil_dp * dp, dp));
   return radius;
 }
 
@@ -1034,8 +1089,18 @@ void read_solid_numerics(MapReader r, const std::vector<SolidMaterial>& material
   n.dt = r.optional_number("dt", positive, "a positive number (solid time step) [s]");
   if (n.dt) check_time_step(r, "dt", *n.dt, end);
   n.plane_stress = r.boolean("plane_stress", n.plane_stress, "true (plane stress) or false (plane strain)");
+  if (dim == 3 && n.plane_stress)
+    r.source().fail(r.at("plane_stress"), fmt::format("{} = true: a 3D body has its real thickness; plane stress is a 2D "
+                                                      "model (a section of a body free in the third direction); expected "
+                                                      "false, or leave the key out",
+                                                      r.path_of("plane_stress")));
   n.wide_plate = r.boolean("wide_plate", n.wide_plate,
                            "true (plane stress with the wide-plate bending modulus E / (1 - nu^2)) or false");
+  if (dim == 3 && n.wide_plate)
+    r.source().fail(r.at("wide_plate"), fmt::format("{} = true: a 3D plate has its real width and bends as a plate by "
+                                                    "itself; the wide-plate modulus E / (1 - nu^2) is a 2D model of it; "
+                                                    "expected false, or leave the key out",
+                                                    r.path_of("wide_plate")));
   if (n.wide_plate && !n.plane_stress)
     r.source().fail(r.at("wide_plate"), fmt::format("{} = true: expected {}: true as well (wide_plate is the "
                                                     "plane-stress model with the bending modulus E / (1 - nu^2))",
@@ -1077,12 +1142,12 @@ void read_solid_loads(MapReader& top, CaseSpec& spec) {
     l.name = unique_name(r, names, "solid loads");
     l.body = r.name("body", "the name of a solid body");
     l.region = r.rect("region", rect_form + " (particles of the body inside are loaded)");
-    l.direction = r.vec("direction", "a non-zero direction [x, y] of the force");
+    l.direction = r.vec("direction", direction_form);
     l.peak = r.number("peak", magnitude_at_most(max_load), fmt::format("a number in [-{0:g}, {0:g}] (peak pressure) [Pa]", max_load));
     l.time = r.number("time", non_negative, "a non-negative number (time of the peak) [s]");
     l.width = r.number("width", positive, "a positive number (1/e half-width of the pulse) [s]");
     r.finish();
-    if (!(l.direction.norm() > 0)) src.expected(r.at("direction"), "a non-zero direction [x, y] of the force");
+    if (!(l.direction.norm() > 0)) src.expected(r.at("direction"), direction_form);
     const BodySpec& b = solid_body(r, spec, "body", l.body);
     if (!overlaps(l.region, b.rect))
       src.fail(r.at("region"), fmt::format("{} = {} does not overlap body '{}' {}: expected a region that covers part of "
@@ -1124,12 +1189,12 @@ void read_sources(MapReader& top, const fs::path& base_dir, CaseSpec& spec) {
     s.type = r.choice("type", {"explosion", "force"}) == "explosion" ? SourceType::explosion : SourceType::force;
     s.position = r.vec("position", point_form + " on the body");
     s.amplitude = r.number("amplitude", magnitude_at_most(max_load),
-                           fmt::format(s.type == SourceType::explosion ? "a number in [-{0:g}, {0:g}] (line moment M0) [N m/m]"
-                                                                       : "a number in [-{0:g}, {0:g}] (line force F0) [N/m]",
-                                       max_load));
+                           fmt::format("a number in [-{0:g}, {0:g}] {1}", max_load,
+                                       s.type == SourceType::explosion ? (dim == 2 ? "(line moment M0) [N m/m]" : "(moment M0) [N m]")
+                                                                       : (dim == 2 ? "(line force F0) [N/m]" : "(force F0) [N]")));
     if (s.type == SourceType::force) {
-      s.direction = r.vec("direction", "a non-zero direction [x, y] of the force");
-      if (!(s.direction.norm() > 0)) src.expected(r.at("direction"), "a non-zero direction [x, y] of the force");
+      s.direction = r.vec("direction", direction_form);
+      if (!(s.direction.norm() > 0)) src.expected(r.at("direction"), direction_form);
       s.direction.normalize();
     } else if (r.has("direction")) {
       src.fail(r.at("direction"), fmt::format("{}: expected only with type: force (an explosion pushes in every "
@@ -1234,18 +1299,34 @@ void read_output(MapReader r, const Real end, OutputSpec& out) {
   r.finish();
 }
 
+/// The case's `dimension` (2 or 3, default 2) must be the build's. Checked before any other key, so that
+/// a case of the other dimension is refused for that and not for its first vector.
+void check_dimension(const Source& src, const MapReader& top) {
+  const std::optional<Field> f = top.peek("dimension");
+  const int d = f ? to_int(src, *f, [](const long long k) { return k == 2 || k == 3; },
+                           "2 or 3 (the spatial dimension of the case; default 2)")
+                  : 2;
+  if (d == dim) return;
+  const std::string what_to_do =
+      dim == 2 ? "expected a 2D case (dimension: 2, the default), or run the 3D build (cmake -DMPSFSI_DIM=3, see README)"
+               : "expected a 3D case (dimension: 3), or run the 2D build (cmake -DMPSFSI_DIM=2, the default; see README)";
+  src.fail(f ? *f : top.field(), fmt::format("dimension = {}{}: this mpsfsi is built for {}D (MPSFSI_DIM={}); {}", d,
+                                             f ? "" : " (the default)", dim, dim, what_to_do));
+}
+
 CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& base_dir) {
   CaseSpec spec;
   MapReader top(src, Field{root, ""}, "a map of case keys (name, description, source, dp, domain, time, ...)");
+  check_dimension(src, top);
   spec.name = top.name("name", "the case name: " + name_form);
   spec.description = top.text("description", "a one-line description of the case");
   spec.source = top.text("source", "where the geometry and data come from (paper, experiment)");
   spec.dp = top.number("dp", positive, "a positive number (particle spacing in metres)");
   spec.domain = top.rect("domain", rect_form + " (particles leaving it are removed)");
   read_time(top.map("time", "a map {end, dt or cfl, dt_max} in seconds"), spec.time);
-  spec.gravity = top.vec("gravity", Vec::Zero(), "a vector [gx, gy] in m/s2");
+  spec.gravity = top.vec("gravity", Vec::Zero(), "a vector " + components("g") + " in m/s2");
   if (!(spec.gravity.norm() <= max_gravity))
-    src.expected(top.at("gravity"), fmt::format("a vector [gx, gy] in m/s2 of magnitude at most {:g} m/s2 (1000 g)", max_gravity));
+    src.expected(top.at("gravity"), fmt::format("a vector {} in m/s2 of magnitude at most {:g} m/s2 (1000 g)", components("g"), max_gravity));
   read_materials(top.map("materials", "a map of materials, e.g. water: {type: fluid, rho: 1000, nu: 1.0e-6}"), spec);
 
   std::map<std::string, std::string> body_and_wall_names;
@@ -1273,6 +1354,7 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   read_probes(top, spec);
   read_receivers(top.optional_map("receivers", "a map {interval, radius, points: [{name, body, position}, ...]}"), spec);
   read_output(top.optional_map("output", "a map {interval, probe_interval, fields}"), spec.time.end, spec.output);
+  top.has("dimension");  // checked first (check_dimension); listed last among the known keys
   top.finish();
   return spec;
 }

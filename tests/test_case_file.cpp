@@ -354,6 +354,31 @@ TEST(CaseFileErrors, VectorWithThreeComponents) {
   EXPECT_THAT(error_of(text2), HasSubstr("tank_motion.pivot = [0.3, 0, 1]: expected a point [x, y] in metres"));
 }
 
+TEST(CaseFileErrors, DimensionThreeIsRefusedByThe2DBuild) {
+  const std::string expected = "dimension = 3: this mpsfsi is built for 2D (MPSFSI_DIM=2); expected a 2D case (dimension: 2, "
+                               "the default), or run the 3D build (cmake -DMPSFSI_DIM=3, see README)";
+  const std::string text = std::string(minimal_case) + "dimension: 3\n";
+  EXPECT_EQ(error_of(text), at_line(text, "dimension:") + " " + expected);
+  // Checked before anything else: the 3D vectors of a 3D case do not give their own error.
+  const std::string text3d =
+      "dimension: 3\n" + replaced(minimal_case, "{min: [0, 0], max: [1, 1]}", "{min: [0, 0, 0], max: [1, 1, 1]}");
+  EXPECT_EQ(error_of(text3d), file_name + ":1: " + expected);
+  EXPECT_EQ(error_of(minimal_case, {"dimension=3"}), file_name + " (--set dimension=3): " + expected);
+  EXPECT_EQ(error_of(std::string(minimal_case) + "dimension: 4\n"),
+            at_line(std::string(minimal_case) + "dimension: 4\n", "dimension:") +
+                " dimension = 4: expected 2 or 3 (the spatial dimension of the case; default 2)");
+  EXPECT_THAT(error_of(std::string(minimal_case) + "dimension: 2.0\n"), HasSubstr("dimension = 2.0: expected 2 or 3"));
+  // dimension: 2 is the default, said explicitly; the key is listed among the known ones.
+  const CaseSpec c = parse_case(std::string(minimal_case) + "dimension: 2\n", file_name);
+  EXPECT_EQ(c.bodies.size(), 1u);
+  EXPECT_THAT(error_of(std::string(minimal_case) + "colour: red\n"), HasSubstr("receivers, output, dimension"));
+}
+
+TEST(CaseFileErrors, RollAxisIsA3DKey) {
+  EXPECT_THAT(error_of(valid_with("period: 1.2", "period: 1.2\n  axis: [0, 0, 1]")),
+              HasSubstr("unknown key 'axis' in tank_motion; expected one of: type, pivot, amplitude_deg, period"));
+}
+
 TEST(CaseFileErrors, OutOfRangeValues) {
   const std::string text = valid_with("dp: 0.004", "dp: -0.004");
   EXPECT_EQ(error_of(text), at_line(text, "dp:") + " dp = -0.004: expected a positive number (particle spacing in metres)");
