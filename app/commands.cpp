@@ -65,16 +65,21 @@ int command_check(const RunOptions& opts) {
   // every side of a rectangle to whole particles, so a body can come out longer or shorter than written.
   fmt::print("extent of the bodies (particles + dp/2 on each side):\n");
   std::vector<std::string> warnings;
+  // "[x0, x1] x [y0, y1] (x [z0, z1]) m (a x b (x c) m)"
   const auto show_rect = [&](const Rect& r) {
     const auto x = [&](const Real v) { return std::abs(v) < 1e-9 * spec.dp ? Real(0) : v; };  // no round-off "1e-15"
-    return fmt::format("[{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] m ({:.6g} x {:.6g} m)", x(r.lo[0]), x(r.hi[0]), x(r.lo[1]),
-                       x(r.hi[1]), r.size()[0], r.size()[1]);
+    std::string ranges, sizes;
+    for (int a = 0; a < dim; ++a) {
+      ranges += fmt::format("{}[{:.6g}, {:.6g}]", a ? " x " : "", x(r.lo[a]), x(r.hi[a]));
+      sizes += fmt::format("{}{:.6g}", a ? " x " : "", r.size()[a]);
+    }
+    return fmt::format("{} m ({} m)", ranges, sizes);
   };
   for (std::size_t k = 0; k < spec.bodies.size() && k < scene.counts.size(); ++k) {
     const BodyCount& c = scene.counts[k];
     std::string line = fmt::format("  {:<20} {}", c.name, show_rect(c.extent));
     if (c.free_length)
-      line += fmt::format("; free length {:.6g} m along {} (file: {:.6g} m)", *c.free_length, c.free_axis == 0 ? "x" : "y",
+      line += fmt::format("; free length {:.6g} m along {} (file: {:.6g} m)", *c.free_length, "xyz"[c.free_axis],
                           c.file_free_length);
     fmt::print("{}\n", line);
     if (c.extent_difference > 0.25 * spec.dp * (1 + 1e-9))

@@ -1,4 +1,5 @@
-// Probe evaluation and CSV output.
+// Probe evaluation and CSV output. "Up" is the last axis (y in 2D, z in 3D): the floor of surge_front and
+// the height of column_height are along it.
 #include "io/probes.hpp"
 
 #include "core/files.hpp"
@@ -15,11 +16,13 @@
 namespace mpsfsi {
 
 namespace {
-/// Largest coordinate `axis` of the fluid particles whose other coordinate is below `limit`,
-/// extended by half a particle to the fluid's outer edge.
-/// (over this rank's owned particles; the largest over the ranks is the probe's value)
-Real fluid_extent(const ParticleSet& p, const int axis, const Real limit) {
-  const int other = 1 - axis;
+/// The vertical axis.
+constexpr int up = dim - 1;
+
+/// Largest coordinate `axis` of the fluid particles whose coordinate `other` is below `limit` (over this
+/// rank's owned particles; the largest over the ranks is the probe's value; evaluate() adds the half
+/// particle to the fluid's outer edge). In 3D over the whole width (the axis that is neither).
+Real fluid_extent(const ParticleSet& p, const int axis, const int other, const Real limit) {
   Real m = -std::numeric_limits<Real>::max();
   for (std::size_t i = 0; i < p.n_owned(); ++i)
     if (p.kind[i] == ParticleKind::fluid && p.position[i][other] < limit) m = std::max(m, p.position[i][axis]);
@@ -43,8 +46,7 @@ ProbeWriter::ProbeWriter(const CaseSpec& spec, const ParticleSet& particles, con
         }
       }
       if (p.particle < 0) throw CaseError(fmt::format("probe '{}': body '{}' has no particles", ps.name, ps.body));
-      columns_.push_back(ps.name + "_dx");
-      columns_.push_back(ps.name + "_dy");
+      for (int a = 0; a < dim; ++a) columns_.push_back(ps.name + "_d" + "xyz"[a]);
     } else {
       columns_.push_back(ps.name);
     }
@@ -82,11 +84,11 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t, MPI_
         sums.push_back(swp);
         break;
       }
-      case ProbeType::surge_front:  // largest x of the fluid within 2 dp of the floor (probe y)
-        maxima.push_back(fluid_extent(p, 0, probe.spec.position[1] + 2 * dp_));
+      case ProbeType::surge_front:  // largest x of the fluid within 2 dp of the floor (the probe's height)
+        maxima.push_back(fluid_extent(p, 0, up, probe.spec.position[up] + 2 * dp_));
         break;
-      case ProbeType::column_height:  // largest y of the fluid within 2 dp of the back wall (probe x)
-        maxima.push_back(fluid_extent(p, 1, probe.spec.position[0] + 2 * dp_));
+      case ProbeType::column_height:  // largest height of the fluid within 2 dp of the back wall (probe x)
+        maxima.push_back(fluid_extent(p, up, 0, probe.spec.position[0] + 2 * dp_));
         break;
       case ProbeType::displacement: {
         // Global: x - x0. Tank frame (the tank at rest at t = 0): R(-theta)(x - pivot) - (x0 - pivot).
@@ -98,8 +100,7 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t, MPI_
           const Vec x = p.position[static_cast<std::size_t>(i)];
           d = tank_frame ? Vec(tank_.to_tank_frame(x, theta) - (probe.initial - tank_.pivot())) : Vec(x - probe.initial);
         }
-        maxima.push_back(d[0]);
-        maxima.push_back(d[1]);
+        for (int a = 0; a < dim; ++a) maxima.push_back(d[a]);
         break;
       }
     }
@@ -123,7 +124,7 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t, MPI_
         values.push_back(maxima[km++] + 0.5 * dp_);
         break;
       case ProbeType::displacement:
-        for (int c = 0; c < 2; ++c, ++km)
+        for (int c = 0; c < dim; ++c, ++km)
           values.push_back(maxima[km] == lowest ? std::numeric_limits<Real>::quiet_NaN() : maxima[km]);
         break;
     }

@@ -1,6 +1,7 @@
 // Probes written as CSV, one row per output time: pressure at a point (kernel-averaged), surge-front
 // position, water-column height at the back wall, and the displacement of a point of a body (in the
-// global frame or in the rotating frame of the tank, seed 004 §5.4 Fig. 12).
+// global frame or in the rotating frame of the tank, seed 004 §5.4 Fig. 12). Heights are along the last
+// axis (y in 2D, z in 3D); in 3D the front and the column are the largest over the tank's width.
 #pragma once
 
 #include "core/particles.hpp"
@@ -29,7 +30,7 @@ class ProbeWriter {
   /// of the case file (the columns after time), from the owned particles of every rank of `comm` (a
   /// collective).
   std::vector<Real> evaluate(const ParticleSet& particles, Real t, MPI_Comm comm = MPI_COMM_SELF) const;
-  /// Column names after "time" (a displacement probe has two: _dx and _dy).
+  /// Column names after "time" (a displacement probe has one per axis: _dx, _dy (, _dz)).
   const std::vector<std::string>& columns() const { return columns_; }
 
  private:

@@ -2,6 +2,7 @@
 #include "io/receivers.hpp"
 
 #include "core/point_stencil.hpp"
+#include "core/text.hpp"
 
 #include <fmt/format.h>
 
@@ -24,8 +25,8 @@ ReceiverWriter::ReceiverWriter(const CaseSpec& spec, const ParticleSet& particle
     try {
       st = interpolation_stencil(particles.position, candidates, rs.position, spec.receivers.radius);
     } catch (const std::invalid_argument& e) {
-      throw CaseError(fmt::format("{}: receiver '{}' at ({:g}, {:g}) on body '{}': {}", spec.file, rs.name,
-                                  rs.position[0], rs.position[1], rs.body, e.what()));
+      throw CaseError(fmt::format("{}: receiver '{}' at {} on body '{}': {}", spec.file, rs.name, show_point(rs.position),
+                                  rs.body, e.what()));
     }
     Receiver r;
     for (std::size_t q = 0; q < st.index.size(); ++q) {
@@ -36,8 +37,7 @@ ReceiverWriter::ReceiverWriter(const CaseSpec& spec, const ParticleSet& particle
       r.phi.push_back(st.weight[q]);
     }
     receivers_.push_back(std::move(r));
-    columns_.push_back(rs.name + "_ux");
-    columns_.push_back(rs.name + "_uy");
+    for (int a = 0; a < dim; ++a) columns_.push_back(rs.name + "_u" + "xyz"[a]);
   }
   if (receivers_.empty() || path.empty()) return;
   out_.open(path, append ? std::ios::app : std::ios::trunc);
@@ -121,7 +121,8 @@ void ReceiverWriter::record_if_due(const Real t, const ParticleSet& particles, M
   const std::vector<Vec> values = evaluate(particles, comm);  // on every rank: a collective
   if (!out_.is_open()) return;
   out_ << fmt::format("{:.9g}", t);
-  for (const Vec& u : values) out_ << fmt::format(",{:.9g},{:.9g}", u[0], u[1]);
+  for (const Vec& u : values)
+    for (int a = 0; a < dim; ++a) out_ << fmt::format(",{:.9g}", u[a]);
   out_ << "\n";
   if (++rows_ % 256 == 0) flush();
 }

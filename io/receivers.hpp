@@ -4,7 +4,7 @@
 // (core/point_stencil.hpp: Wendland C2 kernel with a moving-least-squares correction, so a receiver
 // at the free surface, whose neighbourhood is one-sided, reads the linear extrapolation):
 //   u_r(t) = sum_k phi_k (x_k(t) - x_k(0)).
-// Columns: time, <name>_ux, <name>_uy for each receiver in the order of the case file [s, m].
+// Columns: time, <name>_ux, <name>_uy (3D: and <name>_uz) for each receiver in the order of the case file [s, m].
 // Rows: at t = 0 and then every `interval` of simulated time (every step without an interval).
 #pragma once
 

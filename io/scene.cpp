@@ -5,12 +5,14 @@
 #include "core/geometry.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
+#include "core/text.hpp"
 
 #include <fmt/format.h>
 
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -34,9 +36,12 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   count.name = b.name;
   count.kind = is_solid ? "solid" : "fluid";
   count.n_particles = points.size();
-  // The free length is measured along the axis the clamp cuts (free_part), else along the longer side.
+  // The free length is measured along the axis the clamp cuts (free_part), else along the longest side
+  // (the last of equally long ones).
   const Rect free_rect = free_part(b);
-  int free_axis = b.rect.size()[1] >= b.rect.size()[0] ? 1 : 0;
+  int free_axis = 0;
+  for (int a = 1; a < dim; ++a)
+    if (b.rect.size()[a] >= b.rect.size()[free_axis]) free_axis = a;
   for (int a = 0; a < dim; ++a)
     if (free_rect.lo[a] != b.rect.lo[a] || free_rect.hi[a] != b.rect.hi[a]) free_axis = a;
   Vec lo = Vec::Constant(std::numeric_limits<Real>::max()), hi = -lo;
@@ -126,10 +131,10 @@ void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
     if (j_min == p.size()) continue;
     const std::size_t j = j_min;
     throw CaseError(fmt::format(
-        "{}: bodies '{}' and '{}' overlap: particles at ({:.6g}, {:.6g}) and ({:.6g}, {:.6g}) are closer than dp/2; "
-        "expected bodies that at most touch",
-        spec.file, p.bodies[p.body[i]].name, p.bodies[p.body[j]].name, p.position[i][0], p.position[i][1],
-        p.position[j][0], p.position[j][1]));
+        "{}: bodies '{}' and '{}' overlap: particles at {} and {} are closer than dp/2; expected bodies that at most "
+        "touch",
+        spec.file, p.bodies[p.body[i]].name, p.bodies[p.body[j]].name, show_point(p.position[i]),
+        show_point(p.position[j])));
   }
 }
 
@@ -147,17 +152,33 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
 namespace {
 
 /// Lattice cells (round(side / dp), at least 1) along each side of a rectangle.
-std::size_t cells(const Real length, const Real dp) { return static_cast<std::size_t>(lattice_cells(length, dp)); }
+using Cells = std::array<std::size_t, dim>;
+Cells cells(const Rect& r, const Real dp) {
+  Cells n;
+  for (int a = 0; a < dim; ++a) n[a] = static_cast<std::size_t>(lattice_cells(r.size()[a], dp));
+  return n;
+}
 
-/// Cells of a box's wall (box_walls) within `layers` layers outside its inner nx x ny cells.
-std::size_t box_cells(const std::size_t nx, const std::size_t ny, const std::size_t layers, const bool open_top) {
-  return (nx + 2 * layers) * (ny + (open_top ? 1 : 2) * layers) - nx * ny;
+std::size_t product(const Cells& n) {
+  std::size_t p = 1;
+  for (const std::size_t k : n) p *= k;
+  return p;
+}
+
+/// Cells of a box's wall (box_walls) within `layers` layers outside its inner n cells (no layers above
+/// the top, the last axis, when it is open).
+std::size_t box_cells(const Cells& n, const std::size_t layers, const bool open_top) {
+  Cells outer = n;
+  for (int a = 0; a < dim; ++a) outer[a] += (a == dim - 1 && open_top ? 1 : 2) * layers;
+  return product(outer) - product(n);
 }
 
 /// Cells of a block (block_walls) at most `depth` cells deep from its boundary.
-std::size_t block_cells(const std::size_t nx, const std::size_t ny, const std::size_t depth) {
+std::size_t block_cells(const Cells& n, const std::size_t depth) {
   const std::size_t core = 2 * (depth + 1);
-  return nx * ny - (nx > core ? nx - core : 0) * (ny > core ? ny - core : 0);
+  Cells inner = n;
+  for (auto& k : inner) k = k > core ? k - core : 0;
+  return product(n) - product(inner);
 }
 
 /// Bytes of one particle of a newly built scene (ParticleSet::memory_bytes, before the solvers add fields).
@@ -179,15 +200,12 @@ std::string show_bytes(const double bytes) {
 
 ParticleCounts count_particles(const CaseSpec& spec) {
   ParticleCounts n;
-  for (const auto& b : spec.bodies) {
-    const std::size_t cells_b = cells(b.rect.size()[0], spec.dp) * cells(b.rect.size()[1], spec.dp);
-    (b.kind == BodyKind::solid ? n.solid : n.fluid) += cells_b;
-  }
+  for (const auto& b : spec.bodies) (b.kind == BodyKind::solid ? n.solid : n.fluid) += product(cells(b.rect, spec.dp));
   constexpr std::size_t n_dummy = 2;  // the default of box_walls and block_walls, which build_scene uses
   for (const auto& w : spec.walls) {
-    const std::size_t nx = cells(w.rect.size()[0], spec.dp), ny = cells(w.rect.size()[1], spec.dp);
-    const std::size_t wall = w.type == WallType::box ? box_cells(nx, ny, 1, w.open_top) : block_cells(nx, ny, 0);
-    const std::size_t all = w.type == WallType::box ? box_cells(nx, ny, 1 + n_dummy, w.open_top) : block_cells(nx, ny, n_dummy);
+    const Cells c = cells(w.rect, spec.dp);
+    const std::size_t wall = w.type == WallType::box ? box_cells(c, 1, w.open_top) : block_cells(c, 0);
+    const std::size_t all = w.type == WallType::box ? box_cells(c, 1 + n_dummy, w.open_top) : block_cells(c, n_dummy);
     n.wall += wall;
     n.dummy += all - wall;
   }
@@ -251,10 +269,14 @@ std::optional<std::size_t> available_memory_bytes() {
 
 void check_scene_size(const CaseSpec& spec, const std::optional<std::size_t>& available) {
   // Counted in floating point first: the counts of an absurd dp overflow no integer here.
+  // A wall is bounded by its faces' cells (2D: the sides') in 3 layers on each side, with 6 cells of margin.
   double cells_total = 0;
-  for (const auto& b : spec.bodies) cells_total += std::round(b.rect.size()[0] / spec.dp) * std::round(b.rect.size()[1] / spec.dp);
-  for (const auto& w : spec.walls)
-    cells_total += 6 * (std::round(w.rect.size()[0] / spec.dp) + std::round(w.rect.size()[1] / spec.dp) + 6);
+  for (const auto& b : spec.bodies) cells_total += (b.rect.size() / spec.dp).array().round().prod();
+  for (const auto& w : spec.walls) {
+    const Vec n = (w.rect.size() / spec.dp).array().round();
+    cells_total += dim == 2 ? 6 * (n[0] + n[1] + 6)
+                            : 6 * ((n[0] + 6) * (n[1] + 6) + (n[1] + 6) * (n[dim - 1] + 6) + (n[0] + 6) * (n[dim - 1] + 6));
+  }
   const auto too_many = [&](const double n) {
     return CaseError(fmt::format("{}: dp = {:g}: the case would have about {:.3g} particles; expected at most {:g} (a "
                                  "larger dp)",

@@ -26,7 +26,7 @@ struct BodyCount {
   /// Bodies: the largest distance between a side of `extent` and the same side of the file's rectangle [m].
   Real extent_difference = 0;
   /// Clamped solids: the extent of the unclamped particles (+ dp/2 at each end) along the clamp direction
-  /// `free_axis` (0: x, 1: y) [m], and the same length in the file (free_part of the rectangle).
+  /// `free_axis` (0: x, 1: y, 2: z) [m], and the same length in the file (free_part of the rectangle).
   std::optional<Real> free_length;
   int free_axis = 1;
   Real file_free_length = 0;
