@@ -206,7 +206,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
   });
   settings.continue_series = continuing;
   if (rank == 0 && !opts.quiet) {
-    fmt::print("mpsfsi {}: case {} ({} particles), end time {:g} s, output {}\n", code_version(), spec.name,
+    fmt::print("mpsfsi {}: case {} ({} particles), end time {:g} s, output {}\n", version_and_dimension(), spec.name,
                scene.particles.size(), spec.time.end, out);
     if (const auto& lw = spec.fluid.lateral_walls; lw.gap > 0 && !spec.fluid_materials.empty())
       fmt::print("fluid: lateral-wall friction ({}, gap {:g} m{}): velocity relative to the tank decays at k = {:.4g} 1/s\n",

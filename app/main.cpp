@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
   CLI::App app{"mpsfsi: fluid-structure interaction with the Moving Particle Semi-implicit method"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("mpsfsi ") + code_version());
+  app.set_version_flag("--version", "mpsfsi " + version_and_dimension());
 
   // Options shared by run and check: the case, --dp and --set.
   const auto add_case_options = [](CLI::App* cmd, RunOptions& o, const bool required) {
