@@ -6,10 +6,18 @@ and scalar bar; wall particles are dark grey and dummy particles light grey. Par
 of diameter dp (from --dp, else the run's case.resolved.yaml, else the median nearest-neighbour distance).
 When a field is missing (e.g. a frame written by `mpsfsi check`), that kind is drawn in a plain colour.
 
+3D runs (the resolved case says `dimension: 3`, or the points have a z extent) are drawn as a slice: the
+particles within half a slab width (--slice-width, default 1 dp) of a plane normal to one axis, drawn in
+the plane's other two axes (y: x right, z up; x: y right, z up; z: x right, y up). The default is the plane
+across y through the middle of the particles' y extent (moved to the nearest layer of wall particles of the
+first chosen frame, or of any particles without walls), i.e. a vertical section along the tank; --slice y=0.03 (or x=..., z=..., or just an axis
+for its middle) chooses another. The title gives the plane.
+
 Usage
   scripts/render.py --pvd out/dam_break/particles.pvd --frames -1 --output last.png
   scripts/render.py --pvd out/dam_break --frames 0,10,-1 --output 'frame_{frame:04d}.png'
   scripts/render.py --pvd out/dam_break --frames all --output movie/f_{index:04d}.png --size 1280x720
+  scripts/render.py --pvd out/dam_break_3d --slice x=0.3 --output section.png     (3D: the y-z plane at x = 0.3 m)
 
 --frames: comma-separated frame numbers (negative counts from the end), ranges a:b or a:b:step
 (Python slices, end excluded), or `all`. --output: a PNG name; with several frames it may hold
@@ -120,21 +128,41 @@ def select_frames(spec, n, pvd):
 
 
 def run_info(pvd_dir):
-    """(case name, dp) from the run's case.resolved.yaml if present (top-level keys only)."""
-    name, dp = None, None
+    """(case name, dp, dimension) from the run's case.resolved.yaml if present (top-level keys only)."""
+    name, dp, dimension = None, None, None
     path = os.path.join(pvd_dir, "case.resolved.yaml")
     if os.path.isfile(path):
         with open(path, encoding="utf-8", errors="replace") as f:
             for line in f:
-                m = re.match(r"^(name|dp)\s*:\s*['\"]?([^'\"#\s]+)", line)
+                m = re.match(r"^(name|dp|dimension)\s*:\s*['\"]?([^'\"#\s]+)", line)
                 if m and m.group(1) == "name":
                     name = m.group(2)
                 elif m:
                     try:
-                        dp = float(m.group(2))
+                        value = float(m.group(2))
                     except ValueError:
-                        pass
-    return name, dp
+                        continue
+                    if m.group(1) == "dp":
+                        dp = value
+                    else:
+                        dimension = int(value)
+    return name, dp, dimension
+
+
+def parse_slice(text):
+    """(axis 0-2, value or None) from 'y=0.03' or 'y'."""
+    m = re.fullmatch(r"\s*([xyz])\s*(?:=\s*(\S+)\s*)?", text or "")
+    if not m:
+        fail(f"--slice '{text}': expected an axis and a coordinate, e.g. y=0.03, or an axis alone (x, y or z)")
+    value = None
+    if m.group(2) is not None:
+        try:
+            value = float(m.group(2))
+        except ValueError:
+            fail(f"--slice '{text}': '{m.group(2)}' is not a number")
+        if not math.isfinite(value):
+            fail(f"--slice '{text}': expected a finite coordinate")
+    return "xyz".index(m.group(1)), value
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -176,7 +204,14 @@ def parse_args(argv):
                    help="render N times larger and average down (anti-aliasing; default 3, less for huge images)")
     p.add_argument("--no-dummy", action="store_true", help="do not draw dummy particles")
     p.add_argument("--title", help="title prefix (default: case name); the time is appended")
-    p.add_argument("--bounds", help="view xmin,xmax,ymin,ymax (default: all particles of the chosen frames)")
+    p.add_argument("--bounds", help="view xmin,xmax,ymin,ymax (3D: in the slice's two axes; default: all particles "
+                                    "of the chosen frames)")
+    p.add_argument("--slice", help="3D runs: the plane drawn, AXIS=VALUE normal to axis x, y or z, e.g. y=0.03, or "
+                                   "an axis alone for the middle of the particles along it (default: y through the "
+                                   "middle, a vertical section along x). 3D runs are always drawn as a slice")
+    p.add_argument("--slice-width", type=float, default=1.0,
+                   help="3D runs: thickness of the slab around the plane whose particles are drawn, in dp (default 1: "
+                        "one particle layer)")
     return p.parse_args(argv)
 
 
@@ -200,6 +235,9 @@ def main(argv=None):
         fail(f"--dp {args.dp}: expected a positive number")
     p_range = parse_range(args.pressure_range, "--pressure-range") if args.pressure_range else None
     s_range = parse_range(args.stress_range, "--stress-range") if args.stress_range else None
+    plane = parse_slice(args.slice) if args.slice is not None else None
+    if not args.slice_width > 0 or not math.isfinite(args.slice_width):
+        fail(f"--slice-width {args.slice_width}: expected a positive number of dp")
     view = None
     if args.bounds:
         try:
@@ -229,7 +267,7 @@ def main(argv=None):
         fail(f"{exc}; install Debian's python3-vtk9 and run with /usr/bin/python3")
 
     vtk.vtkObject.GlobalWarningDisplayOff()
-    case_name, run_dp = run_info(os.path.dirname(os.path.abspath(pvd)))
+    case_name, run_dp, run_dimension = run_info(os.path.dirname(os.path.abspath(pvd)))
 
     def load(path):
         reader = (vtk.vtkXMLPUnstructuredGridReader() if path.endswith(".pvtu")  # pieces of a run on several ranks
@@ -261,9 +299,31 @@ def main(argv=None):
         return next((n for n in defaults if n in arrays), None)
 
     data = [load(frames[i][1]) for i in chosen]
+    is_3d = run_dimension == 3 or any(np.ptp(pts[:, 2]) > 0 for pts, _ in data)
+    if plane is not None and not is_3d:
+        fail(f"--slice {args.slice}: {pvd} is a 2D run (drawn whole); --slice is for 3D runs")
 
     # Particle size.
     dp = args.dp or run_dp
+    if dp is None and is_3d:
+        pts = data[0][0]
+        sample = pts if len(pts) <= 4000 else pts[np.linspace(0, len(pts) - 1, 4000).astype(int)]
+        locator_pts = vtk.vtkPoints()
+        locator_pts.SetData(numpy_to_vtk(np.ascontiguousarray(pts), deep=True))
+        poly = vtk.vtkPolyData()
+        poly.SetPoints(locator_pts)
+        loc = vtk.vtkStaticPointLocator()
+        loc.SetDataSet(poly)
+        loc.BuildLocator()
+        ids = vtk.vtkIdList()
+        d = []
+        for p in sample:
+            loc.FindClosestNPoints(2, tuple(p), ids)
+            if ids.GetNumberOfIds() == 2:
+                dist = float(np.linalg.norm(pts[ids.GetId(1)] - p))
+                if dist > 0:
+                    d.append(dist)
+        dp = float(np.median(d)) if d else 1.0
     if dp is None:
         pts = data[0][0][:, :2]
         sample = pts if len(pts) <= 4000 else pts[np.linspace(0, len(pts) - 1, 4000).astype(int)]
@@ -285,6 +345,30 @@ def main(argv=None):
                     d.append(dist)
         dp = float(np.median(d)) if d else 1.0
     radius = 0.5 * dp * args.point_scale
+
+    # 3D: the particles of the slab around the plane, in the plane's two axes (right, up) and the normal.
+    slice_note = ""
+    if is_3d:
+        axis, value = plane if plane is not None else (1, None)
+        right, up = [a for a in range(3) if a != axis]
+        if value is None:  # the particle layer nearest to the middle of the first frame's extent (walls' if any)
+            c = data[0][0][:, axis]
+            mid = 0.5 * (c.min() + c.max())
+            walls = (data[0][1]["kind"] == WALL) | (data[0][1]["kind"] == DUMMY)
+            layers = c[walls] if walls.any() else c
+            value = float(layers[np.argmin(np.abs(layers - mid))])
+        half = 0.5 * args.slice_width * dp
+        sliced = []
+        for pts, arrays in data:
+            sel = np.abs(pts[:, axis] - value) < half
+            sliced.append((np.ascontiguousarray(pts[sel][:, [right, up, axis]]),
+                           {k: a[sel] for k, a in arrays.items()}))
+        if not any(len(pts) for pts, _ in sliced):
+            extent = ", ".join(f"[{pts[:, axis].min():.4g}, {pts[:, axis].max():.4g}]" for pts, _ in data[:1])
+            fail(f"--slice {'xyz'[axis]}={value:g}: no particle within {half:g} m of the plane (the first frame's "
+                 f"particles span {'xyz'[axis]} in {extent})")
+        data = sliced
+        slice_note = f"    slice {'xyz'[axis]} = {value:.4g} m"
 
     # Fields and common colour ranges.
     first_path = frames[chosen[0]][1]
@@ -508,7 +592,7 @@ def main(argv=None):
         prefix = args.title if args.title is not None else (case_name or os.path.basename(os.path.dirname(
             os.path.abspath(pvd))))
         tstr = f"t = {t:.4g} s" if math.isfinite(t) else "t = ?"
-        title.SetInput(f"{prefix}    {tstr}    (frame {i} of {len(frames) - 1})" if prefix else tstr)
+        title.SetInput((f"{prefix}    {tstr}    (frame {i} of {len(frames) - 1})" if prefix else tstr) + slice_note)
 
         win.Render()
         grab = vtk.vtkWindowToImageFilter()
@@ -529,7 +613,7 @@ def main(argv=None):
         png.Write()
         if png.GetErrorCode() != 0 or not os.path.isfile(outputs[index]):
             fail(f"{outputs[index]}: cannot write the PNG")
-        print(f"{PROG}: wrote {outputs[index]} (frame {i}, {tstr}, {len(pts)} particles)")
+        print(f"{PROG}: wrote {outputs[index]} (frame {i}, {tstr}, {len(pts)} particles{slice_note and ' in the slice'})")
     win.Finalize()
     return 0
 

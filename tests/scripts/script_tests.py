@@ -1,5 +1,5 @@
 """Driver of the ctest tests of scripts/plot_probes.py, scripts/render.py and cases/dam_break_lobovsky/analyse.py
-(see tests/scripts/CMakeLists.txt)."""
+(see tests/scripts/CMakeLists.txt; render-3d: tests/dim3/CMakeLists.txt, the 3D build)."""
 import os
 import shutil
 import struct
@@ -123,6 +123,35 @@ def test_render(python, script, mpsfsi, case, work):
     print("OK")
 
 
+def test_render_3d(python, script, mpsfsi, case, work):
+    """A 3D run (the 3D build) is drawn as a slice: by default across y through the middle, or the plane of --slice."""
+    if os.path.exists(work):
+        shutil.rmtree(work)
+    rc, _ = run([mpsfsi, "run", case, "--end-time", "0.02", "--quiet", "--output", work])
+    if rc != 0:
+        fail(f"mpsfsi run exited {rc}")
+    pvd = os.path.join(work, "particles.pvd")
+    out = os.path.join(work, "slice.png")
+    rc, text = run([python, script, "--pvd", pvd, "--output", out, "--size", "640x480"])
+    if rc == 77:
+        print("SKIP: render.py found no X display and no xvfb-run (install Debian's xvfb and xauth)")
+        sys.exit(77)
+    if rc != 0:
+        fail(f"render.py exited {rc}")
+    if (w_h := png_size(out)) != (640, 480):
+        fail(f"{out}: size {w_h}, expected 640x480")
+    if "in the slice" not in text:
+        fail("render.py does not say it drew a slice")
+    out_x = os.path.join(work, "slice_x.png")
+    rc, _ = run([python, script, "--pvd", pvd, "--slice", "x=0.05", "--output", out_x, "--size", "640x480"])
+    if rc != 0:
+        fail(f"render.py --slice x=0.05 exited {rc}")
+    png_size(out_x)
+    expect_error([python, script, "--pvd", pvd, "--slice", "y=5", "--output", out], 2, ["y=5", "no particle"])
+    expect_error([python, script, "--pvd", pvd, "--slice", "w=5", "--output", out], 2, ["--slice 'w=5'"])
+    print("OK")
+
+
 def test_render_no_display(python, script, work):
     os.makedirs(work, exist_ok=True)
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
@@ -185,6 +214,8 @@ if __name__ == "__main__":
         test_plot(*sys.argv[2:5])
     elif what == "render":
         test_render(*sys.argv[2:7])
+    elif what == "render-3d":
+        test_render_3d(*sys.argv[2:7])
     elif what == "render-no-display":
         test_render_no_display(*sys.argv[2:5])
     elif what == "lobovsky":
