@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the 3D toolkit (MPSFSI_DIM=3, in build3d/: the program build3d/app/mpsfsi runs 3D cases) and runs
+# Builds the 3D toolkit (MPSFSI_DIM=3, in build3d/: the program build3d/mpsfsi runs 3D cases) and runs
 # its tests: the core tests and tests/dim3. Called by .ci/run after the 2D suite; developers can run it by hand.
 # MPSFSI_JOBS sets the parallel jobs (default: nproc).
 set -euo pipefail
