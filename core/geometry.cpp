@@ -62,6 +62,29 @@ std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, const Real dp) {
   return x;
 }
 
+std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp) {
+  if (!(dp > 0)) throw std::invalid_argument("cylinder: dp must be positive");
+  if (!(radius > 0)) throw std::invalid_argument("cylinder: radius must be positive");
+  const Real length = axis.norm();
+  if (!(length > 0)) throw std::invalid_argument("cylinder: the axis must be non-zero");
+  const Vec e = axis / length;
+  // Bounding box: the end discs' extents along each coordinate axis, radius sqrt(1 - e_a^2).
+  Vec reach;
+  for (int a = 0; a < dim; ++a) reach[a] = radius * std::sqrt(std::max(Real(0), 1 - e[a] * e[a]));
+  const Vec lo = base.cwiseMin(base + axis) - reach, hi = base.cwiseMax(base + axis) + reach;
+  IVec last;
+  for (int a = 0; a < dim; ++a) last[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / dp)) - 1;
+  std::vector<Vec> points;
+  const Real tol = 1e-9 * dp;
+  for_each_cell(IVec::Zero(), last, [&](const IVec& i) {
+    const Vec x = centre(lo, i, dp);
+    const Real s = (x - base).dot(e);
+    if (s < -tol || s > length + tol) return;
+    if ((x - base - s * e).norm() <= radius + tol) points.push_back(x);
+  });
+  return points;
+}
+
 std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, const Real dp, const bool open_top,
                                  const int n_dummy) {
   const IVec n = cells_of(lo, hi, dp);

@@ -33,6 +33,13 @@ int lattice_cells(Real length, Real dp);
 /// then y, then z).
 std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, Real dp);
 
+/// Particle centres filling the cylinder of radius `radius` around the segment from `base` to `base + axis`: the
+/// points lo + (i + 1/2, j + 1/2 [, k + 1/2]) dp of the lattice anchored at the low corner lo of the cylinder's
+/// bounding box whose projection on the axis falls within the segment and whose distance from the axis is at
+/// most `radius` (in 2D the cylinder's section through its axis: a strip of width 2 radius). Throws
+/// std::invalid_argument when dp or radius is not positive or the axis is zero.
+std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp);
+
 /// A lattice point and whether it belongs to the wall layer (true) or a dummy layer (false).
 struct WallPoint {
   Vec x;

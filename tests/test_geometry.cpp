@@ -139,3 +139,28 @@ TEST(Geometry, BlockKeepsOuterWallAndTwoDummyLayers) {
   EXPECT_EQ(b.size(), static_cast<std::size_t>(12 * 10 * 8 - 6 * 4 * 2));  // the core deeper than 3 layers is left out
 }
 #endif
+
+#if MPSFSI_DIM == 3
+// A cylinder along z, radius 6 dp, length 10 dp: 10 layers of the same disc, spaced dp, every point within the
+// radius; the disc's area is within 3 % of pi r^2. An oblique cylinder has the volume pi r^2 L within 3 %.
+TEST(Geometry, CylinderAlongZAndOblique) {
+  const Real dp = 0.01, r = 0.06;
+  const std::vector<Vec> c = fill_cylinder(Vec(0.1, 0.2, 0.0), Vec(0, 0, 0.1), r, dp);
+  ASSERT_FALSE(c.empty());
+  EXPECT_EQ(c.size() % 10, 0u);
+  const std::size_t per_layer = c.size() / 10;
+  EXPECT_NEAR(static_cast<Real>(per_layer) * dp * dp, pi * r * r, 0.03 * pi * r * r);
+  for (const Vec& x : c) {
+    EXPECT_LE(std::hypot(x[0] - 0.1, x[1] - 0.2), r + 1e-12);
+    EXPECT_GE(x[2], 0.0);
+    EXPECT_LE(x[2], 0.1);
+  }
+  EXPECT_NEAR(min_spacing(c, 2 * dp), dp, 1e-12);
+  const Vec axis = 0.2 * Vec(1, 2, 2).normalized();
+  const std::vector<Vec> o = fill_cylinder(Vec::Zero(), axis, r, dp);
+  EXPECT_NEAR(static_cast<Real>(o.size()) * dp * dp * dp, pi * r * r * 0.2, 0.03 * pi * r * r * 0.2);
+  EXPECT_NEAR(min_spacing(o, 2 * dp), dp, 1e-12);
+  EXPECT_THROW(fill_cylinder(Vec::Zero(), Vec::Zero(), r, dp), std::invalid_argument);
+  EXPECT_THROW(fill_cylinder(Vec::Zero(), axis, 0, dp), std::invalid_argument);
+}
+#endif

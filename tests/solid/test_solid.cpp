@@ -4,6 +4,7 @@
 // Kelvin-Voigt bond damping of coupled runs keeps the first bending mode and damps particle-scale noise.
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
+#include "support/solid_runs.hpp"
 #include "support/spec_builders.hpp"
 
 #include <gtest/gtest.h>
@@ -205,27 +206,13 @@ TEST(Solid, BodiesInContactRepelAndNeverInterpenetrate) {
   solid.prepare_output(0);
   EXPECT_EQ(solid.n_fragments(), 2u);
   const SolidDiagnostics d0 = solid.diagnostics();
-  const Real dt = solid.stable_dt();
-  Real d_min = 1e9;
-  std::size_t max_contacts = 0;
-  for (int k = 0; k < 2000; ++k) {
-    const auto r = solid.advance(k * dt, dt);
-    max_contacts = std::max(max_contacts, r.n_contacts);
-    d_min = std::min(d_min, solid.min_distance_between_fragments());
-  }
-  EXPECT_GT(max_contacts, 0u);
-  EXPECT_GT(d_min, 0.5 * spec.dp);
+  const test::ContactRecord c = test::advance_recording_contacts(solid, 2000);
+  EXPECT_GT(c.max_contacts, 0u);
+  EXPECT_GT(c.closest, 0.5 * spec.dp);
   const SolidDiagnostics d1 = solid.diagnostics();
   EXPECT_LT((d1.momentum - d0.momentum).norm() / d0.momentum.norm(), 1e-10);
   // The cube has bounced: its mean vertical velocity is now upward relative to the block's.
-  const auto& p = scene.particles;
-  Real v_cube = 0, v_block = 0;
-  int n_cube = 0, n_block = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.body[i] == 0) v_cube += p.velocity[i][1], ++n_cube;
-    else v_block += p.velocity[i][1], ++n_block;
-  }
-  EXPECT_GT(v_cube / n_cube, v_block / n_block);
+  EXPECT_GT(test::mean_velocity(scene.particles, 0, 1), test::mean_velocity(scene.particles, 1, 1));
 }
 
 // Another module may reorder the particle set between steps (ParticleSet::reorder): the solver follows
