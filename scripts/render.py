@@ -225,6 +225,31 @@ def parse_range(text, what):
     return lo, hi
 
 
+def median_spacing(pts):
+    """Median distance from a particle to its nearest neighbour, over up to 4000 particles (the particle size
+    when neither --dp nor the run's case gives it). Points are 3D (z = 0 in 2D)."""
+    import numpy as np  # imported where main() imports them, after the display is set up
+    import vtk
+    from vtk.util.numpy_support import numpy_to_vtk
+
+    sample = pts if len(pts) <= 4000 else pts[np.linspace(0, len(pts) - 1, 4000).astype(int)]
+    locator_pts = vtk.vtkPoints()
+    locator_pts.SetData(numpy_to_vtk(np.ascontiguousarray(pts), deep=True))
+    poly = vtk.vtkPolyData()
+    poly.SetPoints(locator_pts)
+    loc = vtk.vtkStaticPointLocator()
+    loc.SetDataSet(poly)
+    loc.BuildLocator()
+    ids = vtk.vtkIdList()
+    d = []
+    for p in sample:
+        loc.FindClosestNPoints(2, tuple(p), ids)
+        if ids.GetNumberOfIds() == 2:
+            dist = float(np.linalg.norm(pts[ids.GetId(1)] - p))
+            if dist > 0:
+                d.append(dist)
+    return float(np.median(d)) if d else 1.0
+
 def main(argv=None):
     args = parse_args(argv)
     m = re.fullmatch(r"\s*(\d+)\s*[xX,]\s*(\d+)\s*", args.size)
@@ -305,45 +330,8 @@ def main(argv=None):
 
     # Particle size.
     dp = args.dp or run_dp
-    if dp is None and is_3d:
-        pts = data[0][0]
-        sample = pts if len(pts) <= 4000 else pts[np.linspace(0, len(pts) - 1, 4000).astype(int)]
-        locator_pts = vtk.vtkPoints()
-        locator_pts.SetData(numpy_to_vtk(np.ascontiguousarray(pts), deep=True))
-        poly = vtk.vtkPolyData()
-        poly.SetPoints(locator_pts)
-        loc = vtk.vtkStaticPointLocator()
-        loc.SetDataSet(poly)
-        loc.BuildLocator()
-        ids = vtk.vtkIdList()
-        d = []
-        for p in sample:
-            loc.FindClosestNPoints(2, tuple(p), ids)
-            if ids.GetNumberOfIds() == 2:
-                dist = float(np.linalg.norm(pts[ids.GetId(1)] - p))
-                if dist > 0:
-                    d.append(dist)
-        dp = float(np.median(d)) if d else 1.0
     if dp is None:
-        pts = data[0][0][:, :2]
-        sample = pts if len(pts) <= 4000 else pts[np.linspace(0, len(pts) - 1, 4000).astype(int)]
-        locator_pts = vtk.vtkPoints()
-        locator_pts.SetData(numpy_to_vtk(np.ascontiguousarray(data[0][0]), deep=True))
-        poly = vtk.vtkPolyData()
-        poly.SetPoints(locator_pts)
-        loc = vtk.vtkStaticPointLocator()
-        loc.SetDataSet(poly)
-        loc.BuildLocator()
-        ids = vtk.vtkIdList()
-        d = []
-        for p in sample:
-            loc.FindClosestNPoints(2, (p[0], p[1], 0.0), ids)
-            if ids.GetNumberOfIds() == 2:
-                q = data[0][0][ids.GetId(1)]
-                dist = math.hypot(q[0] - p[0], q[1] - p[1])
-                if dist > 0:
-                    d.append(dist)
-        dp = float(np.median(d)) if d else 1.0
+        dp = median_spacing(data[0][0])
     radius = 0.5 * dp * args.point_scale
 
     # 3D: the particles of the slab around the plane, in the plane's two axes (right, up) and the normal.

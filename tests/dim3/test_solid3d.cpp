@@ -22,12 +22,16 @@ using test::base_case;
 using test::material;
 using test::solid_body;
 
+/// The mean of the points.
+Vec centroid(const std::vector<Vec>& x) {
+  Vec c = Vec::Zero();
+  for (const Vec& y : x) c += y;
+  return c / static_cast<Real>(x.size());
+}
+
 /// The rotation that best maps the centred reference points onto the centred current points (Kabsch).
 Mat best_rotation(const std::vector<Vec>& x0, const std::vector<Vec>& x) {
-  Vec c0 = Vec::Zero(), c = Vec::Zero();
-  for (std::size_t i = 0; i < x.size(); ++i) c0 += x0[i], c += x[i];
-  c0 /= static_cast<Real>(x.size());
-  c /= static_cast<Real>(x.size());
+  const Vec c0 = centroid(x0), c = centroid(x);
   Mat h = Mat::Zero();
   for (std::size_t i = 0; i < x.size(); ++i) h += (x0[i] - c0) * (x[i] - c).transpose();
   const Eigen::JacobiSVD<Mat> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -38,10 +42,7 @@ Mat best_rotation(const std::vector<Vec>& x0, const std::vector<Vec>& x) {
 
 /// Largest distance of a current point from the reference shape moved rigidly (best rotation, centroids).
 Real shape_error(const std::vector<Vec>& x0, const std::vector<Vec>& x, const Mat& r) {
-  Vec c0 = Vec::Zero(), c = Vec::Zero();
-  for (std::size_t i = 0; i < x.size(); ++i) c0 += x0[i], c += x[i];
-  c0 /= static_cast<Real>(x.size());
-  c /= static_cast<Real>(x.size());
+  const Vec c0 = centroid(x0), c = centroid(x);
   Real e = 0;
   for (std::size_t i = 0; i < x.size(); ++i) e = std::max(e, (x[i] - c - r * (x0[i] - c0)).norm());
   return e;
@@ -63,17 +64,8 @@ TEST(Solid3D, FreeBodyConservesMomentumAndAngularMomentum) {
   const Real dt = solid.stable_dt();
   const SolidDiagnostics d0 = solid.diagnostics();
   ASSERT_GT(d0.rotational, 0);
-  Real e_min = d0.total(), e_max = d0.total();
-  Real t = 0;
-  for (int step = 0; step < 10000; ++step) {
-    solid.advance(t, dt);
-    t += dt;
-    if (step % 100 == 0) {
-      const Real e = solid.diagnostics().total();
-      e_min = std::min(e_min, e);
-      e_max = std::max(e_max, e);
-    }
-  }
+  const test::EnergyRecord run = test::advance_recording_energy(solid, 10000, 100);
+  const Real e_min = run.e_min, e_max = run.e_max;
   const SolidDiagnostics d1 = solid.diagnostics();
   const Real dp_rel = (d1.momentum - d0.momentum).norm() / d0.momentum.norm();
   const Real dl_rel = (d1.angular_momentum - d0.angular_momentum).norm() / d0.angular_momentum.norm();

@@ -52,16 +52,24 @@ PeakAndFrequency first_peak_and_frequency(const std::vector<Real>& t, const std:
   return r;
 }
 
-/// The cantilever: free length L, square section b x b, clamped over 6 layers at x < 0, gravity along -z.
+/// A bar of free length L along x and square section b x b (n_side particles across), clamped over 6 layers at
+/// x < 0.
+CaseSpec clamped_bar_case(const int n_side, const Real length, const Real b, const Real rho, const Real E, const Real nu) {
+  const Real dp = b / n_side;
+  CaseSpec spec = base_case(dp, 10);
+  spec.solid_materials.push_back(material("bar", rho, E, nu));
+  BodySpec bar = solid_body("bar", "bar", Vec(-6 * dp, 0, 0), Vec(length, b, b));
+  bar.clamp = Rect{Vec(-7 * dp, -dp, -dp), Vec(0, b + dp, b + dp)};
+  spec.bodies.push_back(bar);
+  return spec;
+}
+
+/// The cantilever: the clamped bar under gravity along -z.
 PeakAndFrequency run_cantilever(const int n_depth, const Real length, const Real b, const Real rho, const Real E,
                                 const Real nu, const Real t_end) {
-  const Real dp = b / n_depth;
-  CaseSpec spec = base_case(dp, 10);
+  CaseSpec spec = clamped_bar_case(n_depth, length, b, rho, E, nu);
+  const Real dp = spec.dp;
   spec.gravity = Vec(0, 0, -9.81);
-  spec.solid_materials.push_back(material("beam", rho, E, nu));
-  BodySpec beam = solid_body("beam", "beam", Vec(-6 * dp, 0, 0), Vec(length, b, b));
-  beam.clamp = Rect{Vec(-7 * dp, -dp, -dp), Vec(0, b + dp, b + dp)};
-  spec.bodies.push_back(beam);
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   SolidSolver solid(solid_setup(spec), p);
@@ -107,17 +115,12 @@ void check_cantilever(const int n_depth, const Real max_peak_error, const Real m
 TEST(Solid3DValidation, CantileverFivePerDepth) { check_cantilever(5, 10, 5); }
 TEST(Solid3DValidation, CantileverTenPerDepth) { check_cantilever(10, 5, 2); }
 
-/// The twisted bar: length L, square section a x a, clamped over 6 layers at x < 0; the end layer carries the
-/// torque T about the bar's axis as tangential forces proportional to the distance from the axis, from t = 0.
-/// Returns the end's twist (peak and frequency).
+/// The twisted bar: the clamped bar whose end layer carries the torque T about the bar's axis as tangential
+/// forces proportional to the distance from the axis, from t = 0. Returns the end's twist (peak and frequency).
 PeakAndFrequency run_torsion(const int n_side, const Real length, const Real a, const Real torque, const Real rho,
                              const Real E, const Real nu, const Real t_end) {
-  const Real dp = a / n_side;
-  CaseSpec spec = base_case(dp, 10);
-  spec.solid_materials.push_back(material("bar", rho, E, nu));
-  BodySpec bar = solid_body("bar", "bar", Vec(-6 * dp, 0, 0), Vec(length, a, a));
-  bar.clamp = Rect{Vec(-7 * dp, -dp, -dp), Vec(0, a + dp, a + dp)};
-  spec.bodies.push_back(bar);
+  const CaseSpec spec = clamped_bar_case(n_side, length, a, rho, E, nu);
+  const Real dp = spec.dp;
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   SolidSolver solid(solid_setup(spec), p);

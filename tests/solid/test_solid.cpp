@@ -37,17 +37,8 @@ TEST(Solid, FreeBodyConservesMomentumAngularMomentumAndEnergy) {
   const Real dt = solid.stable_dt();
   const SolidDiagnostics d0 = solid.diagnostics();
   EXPECT_GT(d0.rotational, 0);
-  Real e_min = d0.total(), e_max = d0.total();
-  Real t = 0;
-  for (int step = 0; step < 10000; ++step) {
-    solid.advance(t, dt);
-    t += dt;
-    if (step % 100 == 0) {
-      const Real e = solid.diagnostics().total();
-      e_min = std::min(e_min, e);
-      e_max = std::max(e_max, e);
-    }
-  }
+  const test::EnergyRecord run = test::advance_recording_energy(solid, 10000, 100);
+  const Real e_min = run.e_min, e_max = run.e_max, t = run.t;
   const SolidDiagnostics d1 = solid.diagnostics();
   std::printf("free body, %d particles, 1e4 steps of %.3e s: |dP|/|P| = %.2e, |dL|/|L| = %.2e, "
               "energy drift %.3e, energy range %.3e (strain energy at the end %.3f of the total)\n",

@@ -25,6 +25,29 @@ inline ContactRecord advance_recording_contacts(SolidSolver& solid, const int n_
   return r;
 }
 
+/// The total energy's range over a run, and the time reached.
+struct EnergyRecord {
+  Real e_min = 0, e_max = 0;  ///< smallest and largest total energy sampled (the start included) [J]
+  Real t = 0;                 ///< time at the end [s]
+};
+
+/// n_steps steps of the solid's stable dt from t = 0; the total energy is sampled every `every` steps.
+inline EnergyRecord advance_recording_energy(SolidSolver& solid, const int n_steps, const int every) {
+  EnergyRecord r;
+  r.e_min = r.e_max = solid.diagnostics().total();
+  const Real dt = solid.stable_dt();
+  for (int step = 0; step < n_steps; ++step) {
+    solid.advance(r.t, dt);
+    r.t += dt;
+    if (step % every == 0) {
+      const Real e = solid.diagnostics().total();
+      r.e_min = std::min(r.e_min, e);
+      r.e_max = std::max(r.e_max, e);
+    }
+  }
+  return r;
+}
+
 /// Mean velocity component `axis` of the particles of body `body`.
 inline Real mean_velocity(const ParticleSet& p, const int body, const int axis) {
   Real sum = 0;
