@@ -254,6 +254,14 @@ struct SolidSolver::Impl {
   /// Owned and local solid lists, bonds, load and source members from the particle set.
   void renew_structure();
   void compute_rotations();
+  /// Particle i's rotation as compute_rotations left it for this step.
+  Rotation rotation_of(const std::size_t i) const {
+#if MPSFSI_DIM == 2
+    return Rotation((*f_theta)[i]);
+#else
+    return Rotation(q_rot[i]);
+#endif
+  }
   /// Relative displacement u_ij = r_ij - R_ij r0_ij (eq. 25) and r_ij of bond b of owned particle i, R_ij the
   /// pair's mean rotation: R((theta_i + theta_j)/2) in 2D, in 3D the geodesic midpoint of the two rotations,
   /// the unit quaternion (q_i + q_j) / |q_i + q_j| (q_j's sign chosen so that q_i . q_j >= 0), which is
@@ -846,7 +854,7 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     p.velocity[i] += (dt / m.mass) * force[k];
     p.position[i] += dt * p.velocity[i];
     (*f_omega)[i] += (dt / m.inertia) * torque[k];
-    (*f_theta)[i] = (Rotation::from_vector(dt * (*f_omega)[i]) * Rotation::from_vector((*f_theta)[i])).log();  // eq. 46
+    (*f_theta)[i] = (Rotation::from_vector(dt * (*f_omega)[i]) * rotation_of(i)).log();  // eq. 46
     v2_max = std::max(v2_max, p.velocity[i].squaredNorm());
   }
   // The step's totals in one collective (a sub-step does little work between its collectives): bonds broken
