@@ -187,6 +187,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
   settings.quiet = opts.quiet;
   settings.checkpoint_every = opts.checkpoint_every.value_or(0);
   settings.checkpoint_keep = opts.checkpoint_keep;
+  settings.max_steps = opts.max_steps;
   settings.restart = ck.get();
   bool continuing = false;
   on_rank0(MPI_COMM_WORLD, [&] {

@@ -19,6 +19,7 @@ struct RunOptions {
   std::string restart;              ///< run: checkpoint file (or folder: its latest checkpoint) to continue
   std::optional<double> checkpoint_every;  ///< run: simulated seconds between checkpoints
   int checkpoint_keep = 0;          ///< run: keep the newest N checkpoints (0: all)
+  std::size_t max_steps = 0;        ///< run: stop after N steps (0: at the end time)
 
   /// The command-line shortcuts (--end-time, --dp, --subcycles) as --set overrides, then the --set ones.
   std::vector<std::string> all_overrides() const;

@@ -38,6 +38,14 @@ const CLI::Validator positive_seconds(
       return ok ? std::string() : "'" + s + "': expected a positive, finite number of simulated seconds";
     },
     "SECONDS");
+
+/// A whole number of steps, at least 1.
+const CLI::Validator positive_steps(
+    [](std::string& s) {
+      const bool digits = !s.empty() && s.size() <= 12 && s.find_first_not_of("0123456789") == std::string::npos;
+      return digits && std::stoull(s) > 0 ? std::string() : "'" + s + "': expected a whole number of steps, at least 1";
+    },
+    "N");
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -62,6 +70,8 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Run a case");
   add_case_options(run, run_opts, false);
   run->add_option("--end-time", run_opts.end_time, "End time [s] (overrides time.end)");
+  run->add_option("--max-steps", run_opts.max_steps, "Stop after N steps (a frame of that state is written)")
+      ->check(positive_steps);
   run->add_option("--subcycles", run_opts.subcycles, "Solid sub-steps per fluid step: N or auto (overrides coupling.subcycles)")
       ->check(non_empty);
   run->add_option("--output", run_opts.output, "Output folder (default out/<case name>)")->check(non_empty);

@@ -161,7 +161,9 @@ class RunLoop {
     const auto next_checkpoint_after = [&](const Real t) { return (std::floor((t + eps) / every) + 1) * every; };
     Real next_checkpoint = every > 0 ? next_checkpoint_after(t_) : 0;
     Real last_checkpoint = settings_.restart ? t_ : -1;
-    while (t_ < spec_.time.end - eps) {
+    const auto more_steps = [&] { return settings_.max_steps == 0 || step_ - step_begin_ < settings_.max_steps; };
+    Real last_frame = t_;
+    while (t_ < spec_.time.end - eps && more_steps()) {
       keep_last_good();
       step();
       receivers_.record_if_due(t_, p_, comm_);
@@ -173,6 +175,7 @@ class RunLoop {
       if (step_ - step_begin_ == 20) report_measured_projection(t_start);
       if (t_ >= next_output_ - eps) {
         write_output();
+        last_frame = t_;
         // The next output time after t_: one addition as a rule (bit for bit the accumulated times), several
         // intervals at once when a step spans more than one.
         next_output_ = next_after(next_output_, spec_.output.interval, eps);
@@ -183,6 +186,7 @@ class RunLoop {
         next_checkpoint = next_checkpoint_after(t_);
       }
     }
+    if (!more_steps() && last_frame != t_) write_output();  // stopped by --max-steps between frames
     if (every > 0 && last_checkpoint != t_) write_checkpoint_now();  // the end state, to extend the run
     report_progress(t_start, true);
     summary_.n_steps = step_;
@@ -824,7 +828,7 @@ RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real
   }
   const Real dt_solid = c_p > 0 ? spec.solid.dt_factor * spec.dp / c_p : 0;
   if (n_fluid > 0) {
-    r.dt = fluid_stable_dt(spec.time, spec.dp, nu, spec.gravity.norm(), v_max, FluidOptions{}.viscous_number, &r.limit);
+    r.dt = fluid_stable_dt(spec.time, spec.dp, nu, spec.gravity.norm(), v_max, 0, FluidOptions{}.viscous_number, &r.limit);
     if (n_solid > 0) r.subcycles = choose_subcycles(spec.coupling.subcycles, r.dt, dt_solid).n;
   } else if (n_solid > 0) {
     r.dt = spec.solid.dt ? *spec.solid.dt : dt_solid;

@@ -28,6 +28,8 @@ struct RunSettings {
   /// reaching each multiple of it, and at the end of the run); 0: none.
   Real checkpoint_every = 0;
   int checkpoint_keep = 0;      ///< keep only the newest N checkpoints this run wrote; 0: all
+  /// Stop after this many steps of this run (a frame of the state then reached is written); 0: at time.end.
+  std::size_t max_steps = 0;
   /// Continue from this checkpoint (coupling/checkpoint.hpp) instead of the initial state. The scene must
   /// be the case's initial scene: the reference data (bonds, initial densities, wall and probe
   /// references) are rebuilt from it before the state is loaded.

@@ -944,17 +944,21 @@ FluidSolver::~FluidSolver() = default;
 
 Real FluidSolver::stable_dt(std::string* limit) const {
   const Impl& m = *impl_;
-  if (m.time.dt) return fluid_stable_dt(m.time, m.dp, m.nu, 0, 0, m.opt.viscous_number, limit);
-  Real v_max = 0;
-  for (std::size_t i = 0; i < m.p.n_owned(); ++i)
+  if (m.time.dt) return fluid_stable_dt(m.time, m.dp, m.nu, 0, 0, 0, m.opt.viscous_number, limit);
+  Real maxima[2] = {0, 0};  // the largest squared speed, the largest pressure (rows of the projection)
+  const auto& pressure = m.p.scalar_field(fluid_fields::pressure);
+  for (std::size_t i = 0; i < m.p.n_owned(); ++i) {
     if (m.p.kind[i] == ParticleKind::fluid || (m.motion.moving() && m.p.kind[i] == ParticleKind::wall))
-      v_max = std::max(v_max, m.p.velocity[i].squaredNorm());
-  MPI_Allreduce(MPI_IN_PLACE, &v_max, 1, MPI_DOUBLE, MPI_MAX, m.comm);
-  return fluid_stable_dt(m.time, m.dp, m.nu, m.gravity.norm(), std::sqrt(v_max), m.opt.viscous_number, limit);
+      maxima[0] = std::max(maxima[0], m.p.velocity[i].squaredNorm());
+    if (m.projection) maxima[1] = std::max(maxima[1], pressure[i]);
+  }
+  MPI_Allreduce(MPI_IN_PLACE, maxima, 2, MPI_DOUBLE, MPI_MAX, m.comm);
+  return fluid_stable_dt(m.time, m.dp, m.nu, m.gravity.norm(), std::sqrt(maxima[0]), std::sqrt(maxima[1] / m.rho),
+                         m.opt.viscous_number, limit);
 }
 
 Real fluid_stable_dt(const TimeSpec& time, const Real dp, const Real nu, const Real acceleration, const Real v_max,
-                     const Real viscous_number, std::string* limit) {
+                     const Real pressure_speed, const Real viscous_number, std::string* limit) {
   const auto name = [&](const char* s) {
     if (limit) *limit = s;
   };
@@ -973,6 +977,10 @@ Real fluid_stable_dt(const TimeSpec& time, const Real dp, const Real nu, const R
   if (acceleration > 0 && std::sqrt(courant * dp / acceleration) < dt) {
     dt = std::sqrt(courant * dp / acceleration);
     name("acceleration");
+  }
+  if (pressure_speed > 0 && pressure_number * dp / pressure_speed < dt) {
+    dt = pressure_number * dp / pressure_speed;
+    name("pressure");
   }
   if (nu > 0 && viscous_number * dp * dp / nu < dt) {
     dt = viscous_number * dp * dp / nu;

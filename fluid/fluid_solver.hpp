@@ -67,12 +67,21 @@ Real fluid_interaction_radius(const FluidSetup& setup);
 /// particles also the explicit phases (docs/performance.md, ## Parallel runs). Other kinds: 1.
 Real fluid_work_weight(ParticleKind kind);
 
+/// The projection's pressure limit: dt <= pressure_number dp / sqrt(p_max / rho). Its force on particle k,
+/// -(1/rho)(d/C) sum_i p_i dn_i/dx_k, holds the whole pressure, not a difference of pressures, so a particle
+/// displaced by xi from its neighbours feels a restoring acceleration of order p xi / (rho dp^2): a stiffness
+/// that the step integrates explicitly and that is stable only while p dt^2 / (rho dp^2) stays below about
+/// 0.15 (docs/validation.md, "Fluid at every resolution"). 0.3 keeps it below 0.09.
+inline constexpr Real pressure_number = 0.3;
+
 /// Largest admissible fluid dt: time.dt when fixed, else the smallest of time.dt_max, the CFL limit of
 /// eq. 52 for the largest speed v_max, the same limit for a particle that starts at rest under the
-/// acceleration |g| (sqrt(C dp / |g|)) and the viscous limit viscous_number dp^2 / nu. `limit`, if given,
-/// receives the name of the active limit ("fixed", "dt_max", "cfl", "acceleration", "viscous").
-Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, Real v_max, Real viscous_number,
-                     std::string* limit = nullptr);
+/// acceleration |g| (sqrt(C dp / |g|)), the pressure limit pressure_number dp / pressure_speed for
+/// pressure_speed = sqrt(p_max / rho) (0: none; the projection's) and the viscous limit viscous_number dp^2 /
+/// nu. `limit`, if given, receives the name of the active limit ("fixed", "dt_max", "cfl", "acceleration",
+/// "pressure", "viscous").
+Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, Real v_max, Real pressure_speed,
+                     Real viscous_number, std::string* limit = nullptr);
 
 class FluidSolver {
  public:
@@ -85,7 +94,8 @@ class FluidSolver {
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;
 
-  /// Largest admissible dt now (fluid_stable_dt for the fluid's largest speed and the gravity).
+  /// Largest admissible dt now (fluid_stable_dt for the fluid's largest speed, the gravity and, with the
+  /// projection, the largest pressure of the last step).
   Real stable_dt(std::string* limit = nullptr) const;
   /// One semi-implicit step (seed 004 eq. 16-24) from time t to t + dt.
   FluidStepReport advance(Real t, Real dt);

@@ -1,7 +1,8 @@
 # Runs mpsfsi on every case file shipped in cases/ (found when the test runs, so a new case is covered
 # without editing a list). MODE=check: `mpsfsi check CASE` must print "case OK". MODE=run:
-# `mpsfsi run CASE --end-time END` must exit 0 and write a .pvd series into WORK/<case>.
-# Usage: cmake -DMODE=check|run -DMPSFSI=... -DCASES_DIR=... [-DWORK=... -DEND=...] -P all_cases.cmake
+# `mpsfsi run CASE --max-steps STEPS` (its first STEPS steps at its own settings) must exit 0 and write a .pvd
+# series into WORK/<case>.
+# Usage: cmake -DMODE=check|run -DMPSFSI=... -DCASES_DIR=... [-DWORK=... -DSTEPS=...] -P all_cases.cmake
 file(GLOB case_files "${CASES_DIR}/*.yaml")
 list(LENGTH case_files n)
 if(n EQUAL 0)
@@ -13,7 +14,7 @@ foreach(f IN LISTS case_files)
   if(MODE STREQUAL "run")
     set(out ${WORK}/${name})
     file(REMOVE_RECURSE ${out})
-    set(cmd ${MPSFSI} run ${f} --quiet --output ${out} --end-time ${END})
+    set(cmd ${MPSFSI} run ${f} --quiet --output ${out} --max-steps ${STEPS})
   else()
     set(cmd ${MPSFSI} check ${f})
   endif()

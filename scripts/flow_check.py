@@ -1,0 +1,122 @@
+#!/usr/bin/python3
+"""The health of a fluid run, frame by frame (one rank's .vtu frames): the largest fluid speed and where it is,
+the 99.9th percentile and the largest fluid pressure, the fluid particles outside the tank's inner faces
+(inside a wall or below the floor of a `box` wall of the resolved case, with a margin of 1e-9 m) and the
+fluid particle count. With bounds it is a check: it exits 1 naming the first frame and quantity that breaks one.
+
+Usage
+  scripts/flow_check.py out/db                                   # a table, every frame
+  scripts/flow_check.py out/db --frames -1 --max-speed 0.5 --max-p999 4300 --min-pressure-at 0.0005,0.0005,900
+  scripts/flow_check.py out/db --until 0.15 --max-speed 3.4      # the frames with t <= 0.15 s only
+
+--min-pressure-at X,Y,P: the pressure of the fluid particle nearest (X, Y) is at least P [Pa]. Every frame is
+checked for particles outside the tank unless --allow-outside.
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from run_output import frame_files, pick_frames, read_case, read_frame  # noqa: E402
+
+PROG = "flow_check.py"
+FLUID = 0  # ParticleKind::fluid in the `kind` field
+
+
+def frame_times(run, files):
+    """The time of each frame file from the run's particles.pvd (by file name)."""
+    times = {}
+    try:
+        import xml.etree.ElementTree as ET
+        for ds in ET.parse(os.path.join(run, "particles.pvd")).getroot().iter("DataSet"):
+            times[os.path.basename(ds.get("file"))] = float(ds.get("timestep"))
+    except (OSError, ET.ParseError):
+        pass
+    return [times.get(os.path.basename(f), float("nan")) for f in files]
+
+
+def tank_boxes(case):
+    """The inner faces of the case's box walls: (lo, hi, open_top) per box."""
+    boxes = []
+    for w in case.get("walls", []) or []:
+        if w.get("type") == "box":
+            r = w["rectangle"]
+            boxes.append((np.array(r["min"], float), np.array(r["max"], float), bool(w.get("open_top", False))))
+    return boxes
+
+
+def outside(x, boxes):
+    """How many points lie outside every box's inner faces (above an open top counts as inside)."""
+    if not boxes:
+        return 0
+    inside = np.zeros(len(x), bool)
+    for lo, hi, open_top in boxes:
+        ok = np.ones(len(x), bool)
+        for a in range(x.shape[1] if len(lo) == x.shape[1] else len(lo)):
+            ok &= x[:, a] >= lo[a] - 1e-9
+            if not (open_top and a == len(lo) - 1):
+                ok &= x[:, a] <= hi[a] + 1e-9
+        inside |= ok
+    return int((~inside).sum())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run", help="output folder of a run on one rank")
+    ap.add_argument("--frames", default=None, help="comma-separated frame numbers (default: all)")
+    ap.add_argument("--until", type=float, default=None, help="only the frames at t <= this [s]")
+    ap.add_argument("--max-speed", type=float, default=None, help="bound on the largest fluid speed [m/s]")
+    ap.add_argument("--max-p999", type=float, default=None, help="bound on the 99.9th percentile fluid pressure [Pa]")
+    ap.add_argument("--min-pressure-at", default=None, help="X,Y,P: the fluid particle nearest (X, Y) has p >= P [Pa]")
+    ap.add_argument("--allow-outside", action="store_true", help="do not fail on particles outside the tank")
+    args = ap.parse_args()
+
+    files = frame_files(args.run, PROG)
+    times = dict(zip(files, frame_times(args.run, files)))
+    files = pick_frames(files, args.frames, PROG)
+    if args.until is not None:
+        files = [f for f in files if not times[f] > args.until]
+    case = read_case(args.run, PROG)
+    boxes = tank_boxes(case)
+    probe = None
+    if args.min_pressure_at:
+        try:
+            probe = [float(v) for v in args.min_pressure_at.split(",")]
+            assert len(probe) >= 3
+        except (ValueError, AssertionError):
+            sys.exit(f"{PROG}: --min-pressure-at '{args.min_pressure_at}': expected X,Y,P (or X,Y,Z,P in 3D)")
+    failures = []
+    print("frame, t [s], fluid particles, max speed [m/s], x, y of max, p99.9 [Pa], p max [Pa], outside the tank")
+    for f in files:
+        x, fields = read_frame(f)
+        fluid = fields["kind"] == FLUID
+        xf = x[fluid, : x.shape[1]]
+        speed = np.linalg.norm(fields["velocity"][fluid], axis=1)
+        p = fields["pressure"][fluid]
+        k = int(np.argmax(speed)) if len(speed) else 0
+        p999 = float(np.percentile(p, 99.9)) if len(p) else 0.0
+        n_out = outside(x[fluid], boxes)
+        name = os.path.basename(f)
+        print(f"{name}, {times[f]:.5g}, {int(fluid.sum())}, {speed[k] if len(speed) else 0:.4g}, "
+              f"{xf[k, 0] if len(xf) else 0:.5f}, {xf[k, 1] if len(xf) else 0:.5f}, {p999:.4g}, "
+              f"{p.max() if len(p) else 0:.4g}, {n_out}")
+        if args.max_speed is not None and len(speed) and speed[k] > args.max_speed:
+            failures.append(f"{name}: largest fluid speed {speed[k]:.4g} m/s > {args.max_speed}")
+        if args.max_p999 is not None and p999 > args.max_p999:
+            failures.append(f"{name}: 99.9th percentile pressure {p999:.4g} Pa > {args.max_p999}")
+        if n_out and not args.allow_outside:
+            failures.append(f"{name}: {n_out} fluid particle(s) outside the tank's inner faces")
+        if probe is not None and len(xf):
+            d = len(probe) - 1
+            j = int(np.argmin(np.linalg.norm(x[fluid, :d] - np.array(probe[:d]), axis=1)))
+            if p[j] < probe[-1]:
+                failures.append(f"{name}: pressure {p[j]:.4g} Pa at the fluid particle nearest {probe[:d]} < {probe[-1]}")
+    if failures:
+        print("\n".join(f"{PROG}: FAIL {m}" for m in failures), file=sys.stderr)
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
