@@ -70,8 +70,8 @@ Real fluid_work_weight(ParticleKind kind);
 /// The projection's pressure limit: dt <= pressure_number dp / sqrt(p_max / rho). Its force on particle k,
 /// -(1/rho)(d/C) sum_i p_i dn_i/dx_k, holds the whole pressure, not a difference of pressures, so a particle
 /// displaced by xi from its neighbours feels a restoring acceleration of order p xi / (rho dp^2): a stiffness
-/// that the step integrates explicitly and that is stable only while p dt^2 / (rho dp^2) stays below about
-/// 0.15 (docs/validation.md, "Fluid at every resolution"). 0.3 keeps it below 0.09.
+/// that the step integrates explicitly and that is stable only while p dt^2 / (rho dp^2) stays below a bound
+/// (measured in docs/validation.md, "Fluid at every resolution"); 0.3 keeps it at 0.09.
 inline constexpr Real pressure_number = 0.3;
 
 /// Largest admissible fluid dt: time.dt when fixed, else the smallest of time.dt_max, the CFL limit of

@@ -54,7 +54,7 @@ def outside(x, boxes):
     inside = np.zeros(len(x), bool)
     for lo, hi, open_top in boxes:
         ok = np.ones(len(x), bool)
-        for a in range(x.shape[1] if len(lo) == x.shape[1] else len(lo)):
+        for a in range(len(lo)):
             ok &= x[:, a] >= lo[a] - 1e-9
             if not (open_top and a == len(lo) - 1):
                 ok &= x[:, a] <= hi[a] + 1e-9
@@ -92,7 +92,7 @@ def main():
     for f in files:
         x, fields = read_frame(f)
         fluid = fields["kind"] == FLUID
-        xf = x[fluid, : x.shape[1]]
+        xf = x[fluid]
         speed = np.linalg.norm(fields["velocity"][fluid], axis=1)
         p = fields["pressure"][fluid]
         k = int(np.argmax(speed)) if len(speed) else 0
