@@ -206,13 +206,19 @@ class RunLoop {
       summary_.t_halo = t;
       summary_.n_partitions = d.n_partitions;
     }
-    if (rank_ == 0)
+    if (rank_ == 0) {
+      std::string by_limit;
+      for (const auto& [name, n] : summary_.steps_by_limit)
+        by_limit += fmt::format("{}\"{}\":{}", by_limit.empty() ? "" : ",", name, n);
       jsonl_ << fmt::format(
           "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
           "\"coupling\":{:.3f},\"output\":{:.3f},\"removed\":{},\"subcycles_raised_steps\":{},"
-          "\"peak_memory_kib\":{}}}\n",
+          "\"peak_memory_kib\":{},\"dt_min\":{:.6g},\"t_of_dt_min\":{:.9g},\"limit_of_dt_min\":\"{}\","
+          "\"steps_by_limit\":{{{}}}}}\n",
           step_, t_, summary_.wall_seconds, summary_.t_fluid, summary_.t_solid, summary_.t_coupling, summary_.t_output,
-          summary_.n_removed, summary_.n_subcycles_raised, summary_.peak_memory_kib);
+          summary_.n_removed, summary_.n_subcycles_raised, summary_.peak_memory_kib, summary_.dt_min,
+          summary_.t_of_dt_min, summary_.limit_of_dt_min, by_limit);
+    }
     return summary_;
   }
 
@@ -254,6 +260,12 @@ class RunLoop {
       MPI_Bcast(step, 2, MPI_DOUBLE, 0, comm_);
       dt = step[0];
       n_sub = static_cast<int>(step[1]);
+    }
+    ++summary_.steps_by_limit[limit];
+    if (limit != "end time" && (summary_.dt_min == 0 || dt < summary_.dt_min)) {
+      summary_.dt_min = dt;
+      summary_.t_of_dt_min = t_;
+      summary_.limit_of_dt_min = limit;
     }
     if (n_ranks_ > 1 && step_ % repartition_every == 0) {
       const auto t0 = Clock::now();
@@ -882,6 +894,11 @@ std::string format_summary(const RunSummary& s) {
   if (s.last_subcycles > 1) text += fmt::format("\n  subcycles {} (solid dt {:.3e} s)", s.last_subcycles, s.last_solid_dt);
   if (s.n_subcycles_raised > 0)
     text += fmt::format("\n  the requested subcycles were raised to the solid's limit in {} step(s)", s.n_subcycles_raised);
+  if (s.dt_min > 0) {
+    text += fmt::format("\n  smallest dt {:.3e} s at t = {:.6g} s ({}); steps by limit:", s.dt_min, s.t_of_dt_min,
+                        s.limit_of_dt_min);
+    for (const auto& [name, n] : s.steps_by_limit) text += fmt::format(" {} {}", name, n);
+  }
   if (s.n_removed > 0) text += fmt::format("\n  {} fluid particles left the domain and were removed", s.n_removed);
   text += "\n  series " + s.pvd_path;
   return text;

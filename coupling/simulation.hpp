@@ -12,6 +12,7 @@
 
 #include <mpi.h>
 
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -56,6 +57,11 @@ struct RunSummary {
   int last_subcycles = 1;
   std::size_t n_subcycles_raised = 0;  ///< steps where the requested subcycles were raised to the solid limit
   Real last_solid_dt = 0;
+  /// The steps of this run by the limit that set their dt (fluid_stable_dt's names, "end time", ...), and the
+  /// smallest dt of the steps that a limit set (not the end time), with its limit and the time it started at.
+  std::map<std::string, std::size_t> steps_by_limit;
+  Real dt_min = 0, t_of_dt_min = 0;
+  std::string limit_of_dt_min;
   std::string pvd_path;
 };
 

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""The health of a fluid run, frame by frame (one rank's .vtu frames): the largest fluid speed and where it is,
+"""The health of a fluid run, frame by frame (.vtu or .pvtu frames): the largest fluid speed and where it is,
 the 99.9th percentile and the largest fluid pressure, the fluid particles outside the tank's inner faces
-(inside a wall or below the floor of a `box` wall of the resolved case, with a margin of 1e-9 m) and the
+(inside a wall or below the floor of a `box` wall of the resolved case, with a margin of 1e-9 m; "-" for a
+case without one or with tank_motion) and the
 fluid particle count. With bounds it is a check: it exits 1 naming the first frame and quantity that breaks one.
 
 Usage
@@ -19,26 +20,17 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from run_output import frame_files, pick_frames, read_case, read_frame  # noqa: E402
+from run_output import frame_files, frame_times, pick_frames, read_case, read_frame  # noqa: E402
 
 PROG = "flow_check.py"
 FLUID = 0  # ParticleKind::fluid in the `kind` field
 
 
-def frame_times(run, files):
-    """The time of each frame file from the run's particles.pvd (by file name)."""
-    times = {}
-    try:
-        import xml.etree.ElementTree as ET
-        for ds in ET.parse(os.path.join(run, "particles.pvd")).getroot().iter("DataSet"):
-            times[os.path.basename(ds.get("file"))] = float(ds.get("timestep"))
-    except (OSError, ET.ParseError):
-        pass
-    return [times.get(os.path.basename(f), float("nan")) for f in files]
-
-
 def tank_boxes(case):
-    """The inner faces of the case's box walls: (lo, hi, open_top) per box."""
+    """The inner faces of the case's box walls: (lo, hi, open_top) per box; None for a moving tank (its walls
+    are not where the case puts them), whose particles are then not checked."""
+    if case.get("tank_motion"):
+        return None
     boxes = []
     for w in case.get("walls", []) or []:
         if w.get("type") == "box":
@@ -48,9 +40,9 @@ def tank_boxes(case):
 
 
 def outside(x, boxes):
-    """How many points lie outside every box's inner faces (above an open top counts as inside)."""
+    """How many points lie outside every box's inner faces (above an open top counts as inside); None without boxes."""
     if not boxes:
-        return 0
+        return None
     inside = np.zeros(len(x), bool)
     for lo, hi, open_top in boxes:
         ok = np.ones(len(x), bool)
@@ -60,6 +52,19 @@ def outside(x, boxes):
                 ok &= x[:, a] <= hi[a] + 1e-9
         inside |= ok
     return int((~inside).sum())
+
+
+def frame_health(x, fields, boxes):
+    """One frame's figures: fluid count, largest fluid speed and its position, 99.9th percentile and largest
+    fluid pressure, fluid particles outside the boxes' inner faces."""
+    fluid = fields["kind"] == FLUID
+    if not fluid.any():
+        return {"n": 0, "speed": 0.0, "at": (0.0, 0.0), "p999": 0.0, "pmax": 0.0, "outside": outside(x[fluid], boxes)}
+    speed = np.linalg.norm(fields["velocity"][fluid], axis=1)
+    p = fields["pressure"][fluid]
+    k = int(np.argmax(speed))
+    return {"n": int(fluid.sum()), "speed": float(speed[k]), "at": tuple(x[fluid][k]),
+            "p999": float(np.percentile(p, 99.9)), "pmax": float(p.max()), "outside": outside(x[fluid], boxes)}
 
 
 def main():
@@ -91,28 +96,23 @@ def main():
     print("frame, t [s], fluid particles, max speed [m/s], x, y of max, p99.9 [Pa], p max [Pa], outside the tank")
     for f in files:
         x, fields = read_frame(f)
-        fluid = fields["kind"] == FLUID
-        xf = x[fluid]
-        speed = np.linalg.norm(fields["velocity"][fluid], axis=1)
-        p = fields["pressure"][fluid]
-        k = int(np.argmax(speed)) if len(speed) else 0
-        p999 = float(np.percentile(p, 99.9)) if len(p) else 0.0
-        n_out = outside(x[fluid], boxes)
+        h = frame_health(x, fields, boxes)
         name = os.path.basename(f)
-        print(f"{name}, {times[f]:.5g}, {int(fluid.sum())}, {speed[k] if len(speed) else 0:.4g}, "
-              f"{xf[k, 0] if len(xf) else 0:.5f}, {xf[k, 1] if len(xf) else 0:.5f}, {p999:.4g}, "
-              f"{p.max() if len(p) else 0:.4g}, {n_out}")
-        if args.max_speed is not None and len(speed) and speed[k] > args.max_speed:
-            failures.append(f"{name}: largest fluid speed {speed[k]:.4g} m/s > {args.max_speed}")
-        if args.max_p999 is not None and p999 > args.max_p999:
-            failures.append(f"{name}: 99.9th percentile pressure {p999:.4g} Pa > {args.max_p999}")
-        if n_out and not args.allow_outside:
-            failures.append(f"{name}: {n_out} fluid particle(s) outside the tank's inner faces")
-        if probe is not None and len(xf):
+        print(f"{name}, {times[f]:.5g}, {h['n']}, {h['speed']:.4g}, {h['at'][0]:.5f}, {h['at'][1]:.5f}, "
+              f"{h['p999']:.4g}, {h['pmax']:.4g}, {'-' if h['outside'] is None else h['outside']}")
+        if args.max_speed is not None and h["speed"] > args.max_speed:
+            failures.append(f"{name}: largest fluid speed {h['speed']:.4g} m/s > {args.max_speed}")
+        if args.max_p999 is not None and h["p999"] > args.max_p999:
+            failures.append(f"{name}: 99.9th percentile pressure {h['p999']:.4g} Pa > {args.max_p999}")
+        if h["outside"] and not args.allow_outside:
+            failures.append(f"{name}: {h['outside']} fluid particle(s) outside the tank's inner faces")
+        if probe is not None and h["n"]:
+            fluid = fields["kind"] == FLUID
             d = len(probe) - 1
             j = int(np.argmin(np.linalg.norm(x[fluid, :d] - np.array(probe[:d]), axis=1)))
-            if p[j] < probe[-1]:
-                failures.append(f"{name}: pressure {p[j]:.4g} Pa at the fluid particle nearest {probe[:d]} < {probe[-1]}")
+            p_j = fields["pressure"][fluid][j]
+            if p_j < probe[-1]:
+                failures.append(f"{name}: pressure {p_j:.4g} Pa at the fluid particle nearest {probe[:d]} < {probe[-1]}")
     if failures:
         print("\n".join(f"{PROG}: FAIL {m}" for m in failures), file=sys.stderr)
         sys.exit(1)

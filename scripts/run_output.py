@@ -1,12 +1,14 @@
-"""Reading the output folder of an mpsfsi run on one rank, shared by the analysis scripts
-(hydrostatic_check.py, density_error.py): its frames (particles_NNNNNN.vtu), one frame's points and
-point fields, the frames a --frames option picks, and the resolved case (case.resolved.yaml). Errors exit
-with a message that names the calling script.
+"""Reading the output folder of an mpsfsi run, shared by the analysis scripts (hydrostatic_check.py,
+density_error.py, flow_check.py): its frames (particles_NNNNNN.vtu on one rank, particles_NNNNNN.pvtu with
+their pieces on several), one frame's points and point fields, the frames a --frames option picks, their
+times (particles.pvd) and the resolved case (case.resolved.yaml). Errors exit with a message that names the
+calling script.
 """
 import glob
 import os
 import re
 import sys
+import xml.etree.ElementTree as ET
 
 import vtk
 import yaml
@@ -14,8 +16,8 @@ from vtk.util.numpy_support import vtk_to_numpy
 
 
 def read_frame(path):
-    """Points (n x 3) and a dict of point fields of one .vtu frame."""
-    r = vtk.vtkXMLUnstructuredGridReader()
+    """Points (n x 3) and a dict of point fields of one .vtu or .pvtu frame."""
+    r = vtk.vtkXMLPUnstructuredGridReader() if path.endswith(".pvtu") else vtk.vtkXMLUnstructuredGridReader()
     r.SetFileName(path)
     r.Update()
     g = r.GetOutput()
@@ -27,11 +29,22 @@ def read_frame(path):
 
 def frame_files(run, prog):
     """The run's frames in order; exits if it has none."""
-    files = sorted(f for f in glob.glob(os.path.join(run, "particles_*.vtu"))
-                   if re.fullmatch(r"particles_\d+\.vtu", os.path.basename(f)))
+    files = sorted(f for f in glob.glob(os.path.join(run, "particles_*.*vtu"))
+                   if re.fullmatch(r"particles_\d+\.p?vtu", os.path.basename(f)))
     if not files:
-        sys.exit(f"{prog}: no particles_*.vtu in '{run}' (a run on one rank writes them)")
+        sys.exit(f"{prog}: no particles_NNNNNN.vtu or .pvtu in '{run}'")
     return files
+
+
+def frame_times(run, files):
+    """The time of each of these frame files from the run's particles.pvd (nan where it does not say)."""
+    times = {}
+    try:
+        for ds in ET.parse(os.path.join(run, "particles.pvd")).getroot().iter("DataSet"):
+            times[os.path.basename(ds.get("file"))] = float(ds.get("timestep"))
+    except (OSError, ET.ParseError):
+        pass
+    return [times.get(os.path.basename(f), float("nan")) for f in files]
 
 
 def pick_frames(files, frames, prog):

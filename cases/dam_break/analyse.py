@@ -7,7 +7,9 @@ T = t sqrt(2g/L) from probes.csv (column front), compared over T in [1.5, 3.0] w
 For each it prints the smallest and largest relative error of Z, and the same with the simulation delayed by
 --delays (in T units): a constant delay measures a start-up offset (the experiment's release), a wrong front
 speed would not be removed by it.
-Usage: analyse.py probes.csv [--delays 0 0.1 0.2 0.3] [--max-error PCT]
+With --at T [T ...] it prints instead one line: the relative error of Z against Martin & Moyce a = 2.25 in at
+each T (a resolution sweep's column, scripts/sweep.py).
+Usage: analyse.py probes.csv [--delays 0 0.1 0.2 0.3] [--max-error PCT] [--at 2 3]
 Exit code 1 when --max-error is given and the error against the issue's table (no delay) exceeds it."""
 import argparse
 import csv
@@ -42,6 +44,7 @@ def main():
     ap.add_argument("probes")
     ap.add_argument("--delays", type=float, nargs="+", default=[0.0, 0.1, 0.2, 0.3])
     ap.add_argument("--max-error", type=float)
+    ap.add_argument("--at", type=float, nargs="+", help="T values: the error against Martin & Moyce a = 2.25 in")
     args = ap.parse_args()
     ts, zs = [], []
     with open(args.probes) as f:
@@ -50,6 +53,10 @@ def main():
             zs.append(float(row["front"]) / L)
     if ts[-1] < 3.0:
         sys.exit(f"analyse.py: the run ends at T = {ts[-1]:.2f}; run to t >= {3.0 / math.sqrt(2 * G / L):.3f} s")
+    if args.at:
+        te, ze = read("martin_moyce_1952_fig3_n2_2.csv", "2.25")
+        print(" ".join(f"T={T:g}: {100 * (interp(T, ts, zs) / interp(T, te, ze) - 1):+.1f} %" for T in args.at))
+        return 0
     refs = [("issue table (K&O 1995/96, 5 points)", read("martin_moyce_1952_surge_front.csv"), True),
             ("Koshizuka & Oka 1996 (9 points)", read("koshizuka_oka_1996_surge_front.csv"), False),
             ("Martin & Moyce a = 1.125 in", read("martin_moyce_1952_fig3_n2_2.csv", "1.125"), False),

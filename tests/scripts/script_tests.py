@@ -1,5 +1,6 @@
-"""Driver of the ctest tests of scripts/plot_probes.py, scripts/render.py and cases/dam_break_lobovsky/analyse.py
-(see tests/scripts/CMakeLists.txt; render-3d: tests/dim3/CMakeLists.txt, the 3D build)."""
+"""Driver of the ctest tests of scripts/plot_probes.py, scripts/render.py, scripts/sweep.py with
+scripts/flow_check.py and cases/dam_break_lobovsky/analyse.py (see tests/scripts/CMakeLists.txt; render-3d:
+tests/dim3/CMakeLists.txt, the 3D build)."""
 import os
 import shutil
 import struct
@@ -167,6 +168,31 @@ def test_render_no_display(python, script, work):
     print("OK")
 
 
+def test_sweep(python, scripts, mpsfsi, case, work):
+    """sweep.py runs a case at two dp and tabulates them; flow_check.py on one of the runs passes a bound that holds
+    and fails one that does not, naming it; bad arguments are refused."""
+    shutil.rmtree(work, ignore_errors=True)
+    sweep, check = os.path.join(scripts, "sweep.py"), os.path.join(scripts, "flow_check.py")
+    rc, out = run([python, sweep, case, "--dp", "0.008,0.006", "--out", work, "--mpsfsi", mpsfsi, "--until", "0.01",
+                   "--measure", "echo measured {run}", "--", "--end-time", "0.02", "--set", "output.interval=0.01"])
+    if rc != 0:
+        fail(f"sweep.py exited {rc}")
+    with open(os.path.join(work, "sweep.csv")) as f:
+        rows = [line.rstrip("\n").split(",") for line in f]
+    if len(rows) != 3 or [r[0] for r in rows[1:]] != ["0.008", "0.006"] or any(r[1] != "0" for r in rows[1:]):
+        fail(f"sweep.csv: expected two runs that exited 0, got {rows}")
+    if not all(r[-1].startswith("measured ") for r in rows[1:]) or "| 0.006 | 0 |" not in out:
+        fail("the table lacks the runs or the measure column")
+    run_dir = os.path.join(work, "dp_0.006")
+    rc, _ = run([python, check, run_dir, "--max-speed", "10", "--max-p999", "1e5"])
+    if rc != 0:
+        fail(f"flow_check.py exited {rc} on bounds that hold")
+    expect_error([python, check, run_dir, "--frames", "-1", "--max-speed", "1e-6"], 1, ["largest fluid speed"])
+    expect_error([python, check, run_dir, "--frames", "-1", "--min-pressure-at", "0.003,0.003,1e9"], 1, ["pressure"])
+    expect_error([python, check, run_dir, "--min-pressure-at", "1,2"], 1, ["--min-pressure-at", "X,Y,P"])
+    expect_error([python, sweep, case, "--dp", "0.004,-1", "--out", work], 1, ["--dp", "positive spacings"])
+
+
 def test_lobovsky(python, script, work):
     """analyse.py on probes.csv files made from known signals: the experiment's own record in the program's
     units (the same figures as the experiment's row), and a step with a 1 kHz ripple of amplitude 0.1 rho g H
@@ -220,5 +246,7 @@ if __name__ == "__main__":
         test_render_no_display(*sys.argv[2:5])
     elif what == "lobovsky":
         test_lobovsky(*sys.argv[2:5])
+    elif what == "sweep":
+        test_sweep(*sys.argv[2:7])
     else:
         fail(f"unknown test {what}")
