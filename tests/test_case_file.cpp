@@ -1089,8 +1089,8 @@ TEST(Scene, TooLargeForTheMachineIsRefusedBeforeAllocating) {
     build_scene(spec);  // would need about 780 GiB
     FAIL() << "no error";
   } catch (const CaseError& e) {
-    EXPECT_THAT(e.what(), HasSubstr(dam_break + ": dp = 1e-05: the case would have 426845618 particles (426320000 fluid, 0 "
-                                    "solid, 175202 wall, 350416 dummy) and need about "));
+    EXPECT_THAT(e.what(), HasSubstr(dam_break + ": dp = 1e-05: the case would have 427020836 particles (426320000 fluid, 0 "
+                                    "solid, 233604 wall, 467232 dummy) and need about "));
     EXPECT_THAT(e.what(), HasSubstr("available (MemAvailable in /proc/meminfo, or less under ulimit -v); expected a case that fits: a larger dp"));
   }
   // The same check with a given available memory: the case at its own dp needs about 90 MiB.

@@ -129,7 +129,7 @@ mpsfsi_cli_test(huge_effective_radius 2
   "fluid\\.re_laplacian = 1e6: about pi re\\^2 = 3\\.1e\\+12 neighbours per particle; expected a number in \\(1, 10\\]"
   check ${db} --set fluid.re_laplacian=1e6)
 mpsfsi_cli_test(dp_too_small_for_the_memory 2
-  "dam_break\\.yaml: dp = 1e-05: the case would have 426845618 particles .* and need about [0-9.]+ GiB of memory, but this machine has"
+  "dam_break\\.yaml: dp = 1e-05: the case would have 427020836 particles .* and need about [0-9.]+ GiB of memory, but this machine has"
   check ${db} --dp 1e-5)
 mpsfsi_cli_test(tiny_output_interval 2 "output\\.interval = 1e-300: expected an interval of at least 1e-06 s"
   check ${db} --set output.interval=1e-300)
