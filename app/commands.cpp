@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "core/interrupt.hpp"
+#include "core/output_lock.hpp"
 #include "core/version.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/rank0.hpp"
@@ -105,9 +107,10 @@ int command_check(const RunOptions& opts) {
 
 namespace {
 
-/// The output folder of a new run: created if missing; refused (CaseError) if it is not a folder, cannot be
-/// created, or holds files and `overwrite` is false.
-void prepare_output_folder(const std::string& out, const bool overwrite) {
+/// The output folder of a new run: refused (CaseError) if it is not a folder, cannot be created, or holds files
+/// and `overwrite` is false; else created if missing and locked by `lock` (which throws if another run holds it).
+template <class Lock>
+void prepare_output_folder(const std::string& out, const bool overwrite, Lock&& lock) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::status(out, ec);
@@ -118,8 +121,9 @@ void prepare_output_folder(const std::string& out, const bool overwrite) {
     if (ec)
       throw CaseError(fmt::format("--output {}: cannot read the folder: {}; expected a folder this user can write", out,
                                   ec.message()));
-    if (!empty && !overwrite)
+    if (!empty && !holds_only_lock(out) && !overwrite)
       throw CaseError(fmt::format("--output {}: the folder exists and is not empty; choose another or pass --overwrite", out));
+    lock();  // a refused run leaves no lock file behind
     return;
   }
   fs::create_directories(out, ec);
@@ -127,6 +131,7 @@ void prepare_output_folder(const std::string& out, const bool overwrite) {
     throw CaseError(fmt::format("--output {}: cannot create the folder: {}; expected a path where this user can make a "
                                 "folder",
                                 out, ec ? ec.message() : std::string("not a folder")));
+  lock();
 }
 
 /// The case of a restart: the case file if given, else the one stored in the checkpoint; either way with
@@ -190,13 +195,24 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
   settings.max_steps = opts.max_steps;
   settings.restart = ck.get();
   bool continuing = false;
+  std::vector<std::string> removed;
+  // The output folder is locked (rank 0) for the run's life: a second run into it is refused.
+  std::unique_ptr<OutputLock> lock;
+  const auto take_lock = [&] {
+    try {
+      lock = std::make_unique<OutputLock>(out);
+    } catch (const OutputLocked& e) {
+      throw CaseError(fmt::format("--output {}: {}", out, e.what()));
+    }
+  };
   on_rank0(MPI_COMM_WORLD, [&] {
     if (ck) {
-      const RestartOutputs r = prepare_restart_outputs(out, ck->info, opts.overwrite);
+      const RestartOutputs r = prepare_restart_outputs(out, ck->info, opts.overwrite, take_lock);
       continuing = r.continuing;
       settings.append_files = r.appended;
+      removed = r.removed;
     } else {
-      prepare_output_folder(out, opts.overwrite);
+      prepare_output_folder(out, opts.overwrite, take_lock);
     }
     write_file_atomically(out + "/case.resolved.yaml", spec.resolved_yaml + "\n", "resolved case");
     const std::string command_path = out + "/command.txt";
@@ -206,6 +222,7 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
     check_written(command, command_path, "command line");
   });
   settings.continue_series = continuing;
+  settings.output_lock = lock.get();
   if (rank == 0 && !opts.quiet) {
     fmt::print("mpsfsi {}: case {} ({} particles), end time {:g} s, output {}\n", version_and_dimension(), spec.name,
                scene.particles.size(), spec.time.end, out);
@@ -229,9 +246,25 @@ int command_run(const RunOptions& opts, const std::string& command_line) {
     }
   }
   if (rank == 0 && !note.empty()) fmt::print("{}", note);  // also with --quiet: the run is not the original's
+  if (rank == 0 && !removed.empty()) {  // also with --quiet: files were deleted
+    std::string list;
+    for (std::size_t k = 0; k < removed.size() && k < 6; ++k) list += (k ? ", " : "") + removed[k];
+    if (removed.size() > 6) list += fmt::format(" and {} more", removed.size() - 6);
+    fmt::print("note: the restart continues the folder from t = {:.9g} s; its {} later file(s) of the earlier "
+               "trajectory were removed: {}\n",
+               ck->info.time, removed.size(), list);
+  }
+  install_interrupt_handlers();  // Ctrl-C / SIGTERM: stop at the end of the step (core/interrupt.hpp)
   try {
     const RunSummary s = run_case(spec, std::move(scene), settings, MPI_COMM_WORLD);
     if (rank == 0) fmt::print("{}\n", format_summary(s));
+    if (s.interrupted_by != 0) {
+      if (rank == 0)
+        fmt::print(stderr, "mpsfsi: run interrupted by {} at t = {:.9g} s (step {}); frame and checkpoint written. "
+                           "Continue with: mpsfsi run --restart {}\n",
+                   signal_name(s.interrupted_by), s.end_time, s.n_steps, out);
+      return 128 + s.interrupted_by;
+    }
   } catch (const RunFailure& e) {
     fmt::print(stderr, "mpsfsi: run stopped: {}\n", e.what());
     return 3;

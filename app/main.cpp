@@ -1,7 +1,8 @@
 // The mpsfsi program: `mpsfsi check CASE` validates a case and prints its particle counts and memory
 // estimate; `mpsfsi run CASE` runs it. Exit codes: 0 success, 2 bad input (case file or command
 // line), 3 a run that went wrong (diagnosis printed), 4 an output file could not be written (disk full,
-// permissions; the files written before are complete), 1 an internal error.
+// permissions; the files written before are complete), 1 an internal error, 128 + the signal (130 SIGINT,
+// 143 SIGTERM) a run stopped by a signal at the end of a step, with a frame and a checkpoint.
 #include "app/commands.hpp"
 #include "core/files.hpp"
 #include "core/version.hpp"

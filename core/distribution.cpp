@@ -648,8 +648,9 @@ void Distribution::transfer(ParticleSet& p, const std::vector<std::string>& fiel
   const auto arrays = resolve(p, fields, width);
   if (n_ranks_ == 1 || fields.empty()) return;
   Impl& m = *impl_;
-  assert(m.have_plan && p.n_owned() == m.plan_owned && p.n_ghost() == m.plan_ghost &&
-         "exchange_ghosts and reverse_sum need the set of the last build_ghosts()");
+  // Checked also in Release: a stale plan would read and write past the arrays.
+  if (!(m.have_plan && p.n_owned() == m.plan_owned && p.n_ghost() == m.plan_ghost))
+    throw std::logic_error("exchange_ghosts and reverse_sum need the particle set of the last build_ghosts() (call renew)");
   const auto P = static_cast<std::size_t>(n_ranks_);
   const std::size_t first_ghost = p.n_owned();
   // The particles shared with rank q: my owned ones it holds as ghosts, or my ghosts of its particles (with

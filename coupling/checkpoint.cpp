@@ -3,6 +3,7 @@
 #include "coupling/checkpoint.hpp"
 
 #include "core/files.hpp"
+#include "core/output_lock.hpp"
 #include "core/version.hpp"
 #include "io/case.hpp"
 #include "io/vtk_writer.hpp"
@@ -17,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <regex>
 #include <sstream>
 
 namespace mpsfsi {
@@ -67,6 +69,7 @@ std::string latest_in(const std::string& dir) {
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
     const std::string prefix = "checkpoint_", suffix = ".chk";
+    if (!entry.is_regular_file(ec)) continue;
     if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
         name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
       continue;
@@ -232,6 +235,10 @@ Checkpoint read_checkpoint(const std::string& path, MPI_Comm comm) {
       if (chosen.empty()) error = fmt::format("--restart {}: the folder holds no checkpoint_<time>.chk file", path);
     } else if (!fs::exists(path, ec)) {
       error = fmt::format("--restart {}: no such checkpoint file", path);
+    } else if (!fs::is_regular_file(path, ec)) {
+      error = fmt::format("--restart {}: not a regular file; expected a checkpoint file (checkpoint_<time>.chk) or a "
+                          "folder holding one",
+                          path);
     }
     if (error.empty()) data = read_file(chosen, error);
   }
@@ -257,12 +264,46 @@ std::vector<OutputMark> mark_outputs(const std::string& dir, const std::vector<s
   return marks;
 }
 
-RestartOutputs prepare_restart_outputs(const std::string& dir, const CheckpointInfo& info, const bool overwrite) {
+/// The files of `dir` that belong to a trajectory after the checkpoint `info`: frames numbered from its next
+/// frame on (particles_<n>.vtu/.pvtu and their pieces particles_<n>_<rank>.vtu) and checkpoints of later times.
+/// Removes them and returns their names (sorted).
+static std::vector<std::string> remove_later_outputs(const std::string& dir, const CheckpointInfo& info) {
+  static const std::regex frame(R"(particles_(\d+)(_\d+)?\.p?vtu)");
+  static const std::regex checkpoint(R"(checkpoint_(.+)\.chk)");
+  std::vector<std::string> removed;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::smatch m;
+    bool later = false;
+    if (std::regex_match(name, m, frame)) {
+      later = std::stoull(m[1].str()) >= info.next_frame;
+    } else if (std::regex_match(name, m, checkpoint)) {
+      char* end = nullptr;
+      const std::string number = m[1].str();
+      const double t = std::strtod(number.c_str(), &end);
+      later = end != number.c_str() && *end == '\0' && t > info.time * (1 + 1e-12) + 1e-300;
+    }
+    if (!later || !entry.is_regular_file(ec)) continue;
+    fs::remove(entry.path(), ec);
+    if (ec) throw std::runtime_error(fmt::format("cannot remove '{}': {}", entry.path().string(), ec.message()));
+    removed.push_back(name);
+  }
+  std::sort(removed.begin(), removed.end());
+  return removed;
+}
+
+RestartOutputs prepare_restart_outputs(const std::string& dir, const CheckpointInfo& info, const bool overwrite,
+                                       const std::function<void()>& lock) {
   RestartOutputs r;
   std::error_code ec;
-  if (!fs::exists(dir, ec) || fs::is_empty(dir, ec)) {
+  const auto accept = [&] {
+    if (lock) lock();
+  };
+  if (!fs::exists(dir, ec) || holds_only_lock(dir)) {
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(fmt::format("cannot create the output folder '{}': {}", dir, ec.message()));
+    accept();
     return r;
   }
   if (!fs::is_directory(dir, ec)) throw CaseError(fmt::format("--output {}: not a folder", dir));
@@ -301,13 +342,17 @@ RestartOutputs prepare_restart_outputs(const std::string& dir, const CheckpointI
   }
   if (mismatch.empty() && evidence == 0) mismatch = "it holds none of the run's output files";
   if (!mismatch.empty()) {
-    if (overwrite) return r;
+    if (overwrite) {
+      accept();
+      return r;
+    }
     throw CaseError(fmt::format(
         "--output {}: the folder is not empty and is not the run that wrote the checkpoint at t = {:.6g} s ({}); "
         "choose another (or an empty) folder, or pass --overwrite to start new output files there from the "
         "checkpoint",
         dir, info.time, mismatch));
   }
+  accept();
   for (const auto& m : info.outputs) {
     const fs::path p = fs::path(dir) / m.file;
     if (m.file == "run.jsonl") {  // a log: cut where the checkpoint was written if unchanged, else kept whole
@@ -320,6 +365,7 @@ RestartOutputs prepare_restart_outputs(const std::string& dir, const CheckpointI
     r.appended.push_back(m.file);
   }
   r.continuing = true;
+  r.removed = remove_later_outputs(dir, info);
   return r;
 }
 

@@ -17,6 +17,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -80,16 +81,23 @@ std::vector<OutputMark> mark_outputs(const std::string& dir, const std::vector<s
 struct RestartOutputs {
   bool continuing = false;            ///< the folder is the checkpoint's run: its files continue
   std::vector<std::string> appended;  ///< files truncated to their checkpoint size, to be appended to
+  /// Continuing: the frames and checkpoints of the folder's trajectory after the checkpoint, removed (a restart
+  /// from an earlier point branches off that trajectory; its later files would mix with the new ones).
+  std::vector<std::string> removed;
 };
 
 /// Prepares the output folder `dir` of a restart from `info` (one rank; creates it if missing):
-/// * missing or empty: new files (the series numbering continues from the checkpoint's);
+/// * missing or empty (but for its lock file): new files (the series numbering continues from the checkpoint's);
 /// * the checkpoint's run folder, i.e. its particles.pvd begins with the frames the checkpoint lists and
 ///   its data files (probes.csv, interface.csv, fragments.csv) begin with what they held then: those files
 ///   are truncated to their checkpoint size and continued (rows and frames after the checkpoint time are
 ///   dropped; the caller cuts the .pvd); run.jsonl likewise if it is unchanged up to then, else it is kept
-///   whole and continued (it is a log);
+///   whole and continued (it is a log); the frames and checkpoints after the checkpoint's are removed
+///   (RestartOutputs::removed);
 /// * anything else: CaseError, unless `overwrite`, which starts new files there.
-RestartOutputs prepare_restart_outputs(const std::string& dir, const CheckpointInfo& info, bool overwrite);
+/// `lock` is called once the folder is accepted, before anything in it changes (the output folder's lock,
+/// which throws when another run holds it).
+RestartOutputs prepare_restart_outputs(const std::string& dir, const CheckpointInfo& info, bool overwrite,
+                                       const std::function<void()>& lock = {});
 
 }  // namespace mpsfsi

@@ -171,8 +171,9 @@ void FsiInterface::restore_solid() {
 
 void FsiInterface::compute_load() {
   if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
-  // The ghosts as their owners hold them after the fluid step (positions, pressures, surface flags).
-  if (dist_ && dist_->n_ranks() > 1) dist_->exchange_ghosts(p_, {"position", opt_.pressure_field, opt_.flag_field});
+  // The ghosts as their owners hold them after the fluid step (positions, pressures, surface flags); rebuilt
+  // when the fluid step removed particles that left the domain (the ghost plan then no longer fits).
+  if (dist_ && dist_->n_ranks() > 1) dist_->renew(p_, {"position", opt_.pressure_field, opt_.flag_field});
   auto& load = p_.vector_field(opt_.load_field);
   const auto& flag = p_.scalar_field(opt_.flag_field);
   const auto& pressure = p_.scalar_field(opt_.pressure_field);

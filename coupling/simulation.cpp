@@ -10,6 +10,8 @@
 
 #include "core/distribution.hpp"
 #include "core/files.hpp"
+#include "core/interrupt.hpp"
+#include "core/output_lock.hpp"
 #include "core/text.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/fsi_interface.hpp"
@@ -163,7 +165,7 @@ class RunLoop {
     Real last_checkpoint = settings_.restart ? t_ : -1;
     const auto more_steps = [&] { return settings_.max_steps == 0 || step_ - step_begin_ < settings_.max_steps; };
     Real last_frame = t_;
-    while (t_ < spec_.time.end - eps && more_steps()) {
+    while (t_ < spec_.time.end - eps && more_steps() && !interrupted()) {
       keep_last_good();
       step();
       receivers_.record_if_due(t_, p_, comm_);
@@ -186,9 +188,16 @@ class RunLoop {
         next_checkpoint = next_checkpoint_after(t_);
       }
     }
-    if (!more_steps() && last_frame != t_) write_output();  // stopped by --max-steps between frames
-    if (every > 0 && last_checkpoint != t_) write_checkpoint_now();  // the end state, to extend the run
+    // Stopped by --max-steps or a signal between frames: a frame of the state reached.
+    if ((!more_steps() || summary_.interrupted_by != 0) && last_frame != t_) write_output();
+    // The end state, to extend the run; after a signal always, to continue it.
+    if ((every > 0 || summary_.interrupted_by != 0) && last_checkpoint != t_) write_checkpoint_now();
     report_progress(t_start, true);
+    if (summary_.interrupted_by != 0 && rank_ == 0) {
+      jsonl_ << fmt::format("{{\"event\":\"interrupted\",\"signal\":\"{}\",\"step\":{},\"t\":{:.9g}}}\n",
+                            signal_name(summary_.interrupted_by), step_, t_);
+      jsonl_.flush();
+    }
     summary_.n_steps = step_;
     summary_.end_time = t_;
     summary_.wall_seconds = seconds_since(t_start);
@@ -223,6 +232,22 @@ class RunLoop {
   }
 
  private:
+  /// Whether a signal asked the run to stop (core/interrupt.hpp): every rank's flag, so that all stop after the
+  /// same step (a collective). Sets summary_.interrupted_by.
+  bool interrupted() {
+    int signo = interrupt_signal();
+    if (n_ranks_ > 1) MPI_Allreduce(MPI_IN_PLACE, &signo, 1, MPI_INT, MPI_MAX, comm_);
+    summary_.interrupted_by = signo;
+    return signo != 0;
+  }
+
+  /// Rank 0: throws OutputError when the output folder was removed or replaced (core/output_lock.hpp).
+  void check_output_folder() const {
+    if (settings_.output_lock == nullptr) return;
+    const std::string lost = settings_.output_lock->lost();
+    if (!lost.empty()) throw OutputError(lost + "; the files written before are gone with it");
+  }
+
   void step() {
     std::string limit = "fixed";
     Real dt = 0;
@@ -343,6 +368,13 @@ class RunLoop {
                                      step, t, where(), speed, limits_.fluid));
       if (p_.kind[i] == ParticleKind::solid) {
         const auto m = static_cast<std::size_t>(p_.material[i]);
+        if (m < limits_.solid.size() && speed > limits_.solid[m] && p_.clamped[i] != 0)
+          // A clamped particle moves with the tank: its speed is the prescribed motion's, not the solver's.
+          throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} is clamped and moves at {:.4g} m/s with the prescribed "
+                                       "tank motion, faster than the P-wave speed {:.4g} m/s of its material: the "
+                                       "tank_motion is too violent for the solid to follow (expected a motion whose wall "
+                                       "speed stays well below that speed: a smaller amplitude or a longer period)",
+                                       step, t, where(), speed, limits_.solid[m]));
         if (m < limits_.solid.size() && speed > limits_.solid[m])
           throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} moves at {:.4g} m/s, faster than the P-wave speed "
                                        "{:.4g} m/s of its material: runaway velocity (reduce the solid dt)",
@@ -466,9 +498,16 @@ class RunLoop {
   [[noreturn]] void fail(const std::string& diagnosis) {
     std::string frame;
     try {
-      on_every_rank(comm_, [&] { writer_.write_piece(last_good_, last_good_t_); });
-      on_rank0(comm_, [&] { frame = writer_.commit_frame(last_good_t_); });
-      if (rank_ != 0) writer_.commit_frame(last_good_t_);
+      // A series never repeats a time: when the last good state is the last frame's (a failure in the first
+      // steps after a frame), that frame is it.
+      if (writer_.n_frames() > 0 && writer_.frames().back().first == last_good_t_)
+        frame = (std::filesystem::path(settings_.output_dir) / writer_.frames().back().second).string() + " (already written)";
+      else
+        on_every_rank(comm_, [&] { writer_.write_piece(last_good_, last_good_t_); });
+      if (frame.empty()) {
+        on_rank0(comm_, [&] { frame = writer_.commit_frame(last_good_t_); });
+        if (rank_ != 0) writer_.commit_frame(last_good_t_);
+      }
     } catch (const std::exception& e) {
       frame = std::string("(could not be written: ") + e.what() + ")";
     }
@@ -508,6 +547,7 @@ class RunLoop {
       // Every rank writes its piece; once all are complete, rank 0 adds the frame to the series.
       on_every_rank(comm_, [&] {
         if (!log_error_.empty()) throw OutputError(log_error_);  // found on rank 0 alone, stops all ranks here
+        if (rank_ == 0) check_output_folder();
         writer_.write_piece(p_, t_);
       });
       on_rank0(comm_, [&] {
@@ -524,8 +564,10 @@ class RunLoop {
 
   /// The message of a run stopped because a file could not be written; also logged in run.jsonl.
   std::string stopped_by_output(const std::string& what) {
+    const bool gone = settings_.output_lock != nullptr && !settings_.output_lock->lost().empty();
     const std::string frames =
-        writer_.n_frames() > 0
+        gone                     ? std::string("its files are gone with the folder")
+        : writer_.n_frames() > 0
             ? fmt::format("{} lists the {} complete frame(s) up to t = {:.6g} s", writer_.pvd_path(), writer_.n_frames(),
                           writer_.frames().back().first)
             : fmt::format("no frame was written");
@@ -636,7 +678,10 @@ class RunLoop {
       const ParticleSet all = dist_->gather(p_, 0);  // rank 0: every particle, rank by rank
       BinaryWriter distribution;
       dist_->save_state(distribution, p_, 0);
-      on_rank0(comm_, [&] { write_checkpoint_on_rank0(all, distribution); });
+      on_rank0(comm_, [&] {
+        check_output_folder();
+        write_checkpoint_on_rank0(all, distribution);
+      });
     } catch (const OutputError& e) {
       throw OutputError(stopped_by_output(e.what()));
     }

@@ -20,6 +20,7 @@
 namespace mpsfsi {
 
 struct Checkpoint;
+class OutputLock;
 
 struct RunSettings {
   std::string output_dir;
@@ -40,6 +41,9 @@ struct RunSettings {
   /// continue_series, else started anew with the checkpoint's frame numbering.
   std::vector<std::string> append_files;
   bool continue_series = false;
+  /// Rank 0: the lock of output_dir (core/output_lock.hpp); the run stops (OutputError) when the folder was
+  /// removed or replaced. nullptr on the other ranks and in tests that do not lock.
+  const OutputLock* output_lock = nullptr;
 };
 
 struct RunSummary {
@@ -63,6 +67,8 @@ struct RunSummary {
   Real dt_min = 0, t_of_dt_min = 0;
   std::string limit_of_dt_min;
   std::string pvd_path;
+  /// The signal (SIGINT, SIGTERM) that stopped the run at the end of a step; 0 if it ran to its end.
+  int interrupted_by = 0;
 };
 
 /// A run went unstable or left the admissible state; the message is the diagnosis.

@@ -541,6 +541,10 @@ class MapReader {
     return f ? to_bool(src_, *f, form) : fallback;
   }
   std::string text(const std::string& key, const std::string& form) { return to_text(src_, required(key, form), form); }
+  std::string text(const std::string& key, const std::string& fallback, const std::string& form) {
+    const auto f = optional(key);
+    return f ? to_text(src_, *f, form) : fallback;
+  }
   std::string name(const std::string& key, const std::string& form) { return to_name(src_, required(key, form), form); }
   std::string choice(const std::string& key, const std::vector<std::string>& options) {
     return to_choice(src_, required(key, "one of: " + join(options)), options);
@@ -1319,8 +1323,9 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   MapReader top(src, Field{root, ""}, "a map of case keys (name, description, source, dp, domain, time, ...)");
   check_dimension(src, top);
   spec.name = top.name("name", "the case name: " + name_form);
-  spec.description = top.text("description", "a one-line description of the case");
-  spec.source = top.text("source", "where the geometry and data come from (paper, experiment)");
+  // Optional: a user's own case has no paper (the shipped cases give both; test shipped_cases_name_their_source).
+  spec.description = top.text("description", "", "a one-line description of the case");
+  spec.source = top.text("source", "", "where the geometry and data come from (paper, experiment)");
   spec.dp = top.number("dp", positive, "a positive number (particle spacing in metres)");
   spec.domain = top.rect("domain", rect_form + " (particles leaving it are removed)");
   read_time(top.map("time", "a map {end, dt or cfl, dt_max} in seconds"), spec.time);

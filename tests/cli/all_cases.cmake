@@ -1,5 +1,6 @@
 # Runs mpsfsi on every case file shipped in cases/ (found when the test runs, so a new case is covered
-# without editing a list). MODE=check: `mpsfsi check CASE` must print "case OK". MODE=run:
+# without editing a list). MODE=check: `mpsfsi check CASE` must print "case OK", and the
+# file must give description: and source:. MODE=run:
 # `mpsfsi run CASE --max-steps STEPS` (its first STEPS steps at its own settings) must exit 0 and write a .pvd
 # series into WORK/<case>.
 # Usage: cmake -DMODE=check|run -DMPSFSI=... -DCASES_DIR=... [-DWORK=... -DSTEPS=...] -P all_cases.cmake
@@ -17,6 +18,12 @@ foreach(f IN LISTS case_files)
     set(cmd ${MPSFSI} run ${f} --quiet --output ${out} --max-steps ${STEPS})
   else()
     set(cmd ${MPSFSI} check ${f})
+    # A user's own case may leave out description and source; a shipped case names both.
+    file(STRINGS ${f} named REGEX "^(description|source):")
+    list(LENGTH named n_named)
+    if(NOT n_named EQUAL 2)
+      list(APPEND failed "${f}: a shipped case gives both description: and source: at the top level\n")
+    endif()
   endif()
   execute_process(COMMAND ${cmd} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
   if(MODE STREQUAL "run")

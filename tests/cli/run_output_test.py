@@ -16,24 +16,13 @@ import subprocess
 import sys
 import time
 
+from checks import check, finish, run_program
+
 MPSFSI, CASES, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
-failures = []
-passed = 0
-
-
-def check(name, ok, detail=""):
-    global passed
-    if ok:
-        passed += 1
-        print(f"ok: {name}")
-    else:
-        failures.append(name)
-        print(f"FAIL: {name}\n{detail}")
 
 
 def run(args, **kw):
-    return subprocess.run([MPSFSI] + args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                          timeout=300, **kw)
+    return run_program(MPSFSI, args, **kw)
 
 
 def full_disk():
@@ -131,5 +120,4 @@ progress_is_flushed()
 fragments_only_when_breakable()
 empty_values_refused()
 run_log_lines_once()
-print(f"{passed} passed, {len(failures)} failed")
-sys.exit(1 if failures else 0)
+finish()
