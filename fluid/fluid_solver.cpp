@@ -2,8 +2,9 @@
 // Laplacian (eq. 12-13) for the viscosity and the PPE, explicit prediction (eq. 16-17), collision model,
 // number density n* (eq. 18), free surface by the double check (§4.3), the PPE with weak compressibility
 // and relaxation (eq. 22-23; the alpha term enters the matrix as 1/(c^2 dt^2), see
-// shared/notes/mps-practice.md), the correction (eq. 19, 24) with the minimum-pressure gradient (eq. 9 with
-// p_min) or the corrected gradient (eq. 14-15), and the time-step control (eq. 52 plus the viscous limit).
+// docs/architecture.md, ## Numerical choices), the correction (eq. 19, 24) with the minimum-pressure gradient
+// (eq. 9 with p_min) or the corrected gradient (eq. 14-15), and the time-step control (eq. 52 plus the viscous
+// limit).
 // The default scheme replaces the PPE and the correction by the projection of the number density (section
 // "the exact projection" below; fluid/fluid_parameters.hpp FluidScheme).
 // Each rank advances the particles it owns (core/distribution.hpp): at the start of a step the owners

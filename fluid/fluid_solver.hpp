@@ -41,7 +41,7 @@ Real lateral_wall_friction_rate(const LateralWallFriction& walls, Real nu);
 
 /// Numerical choices that are not (yet) in the case file.
 struct FluidOptions {
-  Real collision_distance = 0.5;   ///< collision model: pairs closer than this x dp (mps-practice notes)
+  Real collision_distance = 0.5;   ///< collision model: pairs closer than this x dp (docs/architecture.md)
   Real restitution = 0.2;          ///< collision model: restitution coefficient
   int reorder_every = 20;          ///< cell-order the particles every N steps (0: never; skipped with solids)
   Real viscous_number = 0.2;       ///< viscous limit dt <= viscous_number dp^2 / nu

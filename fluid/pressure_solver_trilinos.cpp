@@ -4,8 +4,8 @@
 // both are kept while the ids do not change. SSOR / SGS run CG on Eisenstat's split system (no Tpetra
 // matrix); the other preconditioners get a Tpetra::CrsMatrix made straight from the local CRS arrays
 // (Kokkos views + expertStaticFillComplete): Belos CG or GMRES with MueLu (coarse solver RELAXATION: the
-// default KLU2 coarse solve is wrong on 2 ranks in this build, see shared/notes/trilinos-on-debian.md) or
-// Ifpack2 Chebyshev / ILU(0) (additive Schwarz) / Jacobi / symmetric Gauss-Seidel. A preconditioner may be
+// default KLU2 coarse solve is wrong on 2 ranks in this build, see docs/architecture.md, ## Numerical choices)
+// or Ifpack2 Chebyshev / ILU(0) (additive Schwarz) / Jacobi / symmetric Gauss-Seidel. A preconditioner may be
 // kept for several solves (rebuild_every): it is applied as built on its own, earlier matrix, which stays
 // a valid SPD preconditioner of the new one. The true residual is checked after every solve.
 #include "fluid/pressure_solver.hpp"

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Checks that a case shown in a doc is the case shipped in cases/, and that it passes `mpsfsi check`.
 
-Usage: check_doc_example.py MPSFSI DOC HEADING CASE WORK_DIR
+Usage: check_doc_example.py MPSFSI DOC HEADING CASE WORK_DIR [--whole]
 
 Takes the first ```yaml block after the Markdown heading HEADING (a line equal to it) in DOC and
   1. compares it with the case file CASE without its opening comment lines (the header that says what
-     the case is, its sample runs and its source): they must be equal, line for line;
+     the case is, its sample runs and its source), or with the whole file (--whole): they must be equal,
+     line for line;
   2. writes the block to WORK_DIR/<case name> and runs `mpsfsi check` on it: exit 0 and "case OK".
 Prints a unified diff or the program's output when a check fails; exit 0 when both hold, else 1
 (2 for bad usage or a missing heading or block).
@@ -44,12 +45,13 @@ def case_body(case_path):
 
 
 def main():
-    if len(sys.argv) != 6:
+    whole = sys.argv[6:] == ["--whole"]
+    if len(sys.argv) != 6 + whole:
         print(__doc__, file=sys.stderr)
         return 2
-    mpsfsi, doc, heading, case, work = sys.argv[1:]
+    mpsfsi, doc, heading, case, work = sys.argv[1:6]
     block = doc_block(doc, heading)
-    body = case_body(case)
+    body = open(case, encoding="utf-8").readlines() if whole else case_body(case)
     ok = True
     if block != body:
         ok = False
