@@ -245,7 +245,7 @@ class RunLoop {
   void check_output_folder() const {
     if (settings_.output_lock == nullptr) return;
     const std::string lost = settings_.output_lock->lost();
-    if (!lost.empty()) throw OutputError(lost + "; the files written before are gone with it");
+    if (!lost.empty()) throw OutputError(lost);  // stopped_by_output adds that its files are gone
   }
 
   void step() {
@@ -564,14 +564,18 @@ class RunLoop {
 
   /// The message of a run stopped because a file could not be written; also logged in run.jsonl.
   std::string stopped_by_output(const std::string& what) {
-    const bool gone = settings_.output_lock != nullptr && !settings_.output_lock->lost().empty();
+    // A folder removed while a file was written: the write's error ("No such file") names the symptom, the
+    // lock the cause.
+    const std::string lost = settings_.output_lock != nullptr ? settings_.output_lock->lost() : std::string();
+    const bool gone = !lost.empty();
+    const std::string cause = gone && what.find(lost) == std::string::npos ? lost + " (" + what + ")" : what;
     const std::string frames =
         gone                     ? std::string("its files are gone with the folder")
         : writer_.n_frames() > 0
             ? fmt::format("{} lists the {} complete frame(s) up to t = {:.6g} s", writer_.pvd_path(), writer_.n_frames(),
                           writer_.frames().back().first)
             : fmt::format("no frame was written");
-    const std::string text = fmt::format("{}\nthe run stopped at t = {:.6g} s (step {}); {}", what, t_, step_, frames);
+    const std::string text = fmt::format("{}\nthe run stopped at t = {:.6g} s (step {}); {}", cause, t_, step_, frames);
     if (rank_ == 0 && jsonl_.is_open()) {
       jsonl_ << fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}\n", step_, t_,
                             json_escape(text));
