@@ -21,6 +21,7 @@
 #include <climits>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <memory>
 
@@ -109,8 +110,7 @@ namespace {
 
 /// The output folder of a new run: refused (CaseError) if it is not a folder, cannot be created, or holds files
 /// and `overwrite` is false; else created if missing and locked by `lock` (which throws if another run holds it).
-template <class Lock>
-void prepare_output_folder(const std::string& out, const bool overwrite, Lock&& lock) {
+void prepare_output_folder(const std::string& out, const bool overwrite, const std::function<void()>& lock) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::status(out, ec);

@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <regex>
 #include <sstream>
 
@@ -61,24 +62,29 @@ bool hash_prefix(const fs::path& path, const std::uint64_t size, std::uint64_t& 
   return true;
 }
 
+/// The time in a checkpoint's file name checkpoint_<t>.chk (checkpoint_file_name), or none for another name.
+std::optional<double> checkpoint_time_of(const std::string& name) {
+  const std::string prefix = "checkpoint_", suffix = ".chk";
+  if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+    return std::nullopt;
+  const std::string number = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  char* end = nullptr;
+  const double t = std::strtod(number.c_str(), &end);
+  if (end == number.c_str() || *end != '\0') return std::nullopt;
+  return t;
+}
+
 /// The checkpoint of `dir` with the latest time in its name, or "" if none.
 std::string latest_in(const std::string& dir) {
   std::string best;
   double best_t = -std::numeric_limits<double>::infinity();
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    const std::string prefix = "checkpoint_", suffix = ".chk";
-    if (!entry.is_regular_file(ec)) continue;
-    if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
-        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
-      continue;
-    const std::string number = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
-    char* end = nullptr;
-    const double t = std::strtod(number.c_str(), &end);
-    if (end == number.c_str() || *end != '\0') continue;
-    if (t > best_t) {
-      best_t = t;
+    const auto t = checkpoint_time_of(entry.path().filename().string());
+    if (!t || !entry.is_regular_file(ec)) continue;
+    if (*t > best_t) {
+      best_t = *t;
       best = entry.path().string();
     }
   }
@@ -269,21 +275,14 @@ std::vector<OutputMark> mark_outputs(const std::string& dir, const std::vector<s
 /// Removes them and returns their names (sorted).
 static std::vector<std::string> remove_later_outputs(const std::string& dir, const CheckpointInfo& info) {
   static const std::regex frame(R"(particles_(\d+)(_\d+)?\.p?vtu)");
-  static const std::regex checkpoint(R"(checkpoint_(.+)\.chk)");
   std::vector<std::string> removed;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
     std::smatch m;
-    bool later = false;
-    if (std::regex_match(name, m, frame)) {
-      later = std::stoull(m[1].str()) >= info.next_frame;
-    } else if (std::regex_match(name, m, checkpoint)) {
-      char* end = nullptr;
-      const std::string number = m[1].str();
-      const double t = std::strtod(number.c_str(), &end);
-      later = end != number.c_str() && *end == '\0' && t > info.time * (1 + 1e-12) + 1e-300;
-    }
+    const auto t = checkpoint_time_of(name);
+    const bool later = std::regex_match(name, m, frame) ? std::stoull(m[1].str()) >= info.next_frame
+                                                        : t && *t > info.time * (1 + 1e-12);
     if (!later || !entry.is_regular_file(ec)) continue;
     fs::remove(entry.path(), ec);
     if (ec) throw std::runtime_error(fmt::format("cannot remove '{}': {}", entry.path().string(), ec.message()));

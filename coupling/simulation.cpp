@@ -368,17 +368,18 @@ class RunLoop {
                                      step, t, where(), speed, limits_.fluid));
       if (p_.kind[i] == ParticleKind::solid) {
         const auto m = static_cast<std::size_t>(p_.material[i]);
-        if (m < limits_.solid.size() && speed > limits_.solid[m] && p_.clamped[i] != 0)
-          // A clamped particle moves with the tank: its speed is the prescribed motion's, not the solver's.
-          throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} is clamped and moves at {:.4g} m/s with the prescribed "
-                                       "tank motion, faster than the P-wave speed {:.4g} m/s of its material: the "
-                                       "tank_motion is too violent for the solid to follow (expected a motion whose wall "
-                                       "speed stays well below that speed: a smaller amplitude or a longer period)",
-                                       step, t, where(), speed, limits_.solid[m]));
         if (m < limits_.solid.size() && speed > limits_.solid[m])
-          throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} moves at {:.4g} m/s, faster than the P-wave speed "
-                                       "{:.4g} m/s of its material: runaway velocity (reduce the solid dt)",
-                                       step, t, where(), speed, limits_.solid[m]));
+          // A clamped particle moves with the tank: its speed is the prescribed motion's, not the solver's.
+          throw RunFailure(
+              p_.clamped[i] != 0
+                  ? fmt::format("step {} (t = {:.6g} s): {} is clamped and moves at {:.4g} m/s with the prescribed "
+                                "tank motion, faster than the P-wave speed {:.4g} m/s of its material: the tank_motion "
+                                "is too violent for the solid to follow (expected a motion whose wall speed stays well "
+                                "below that speed: a smaller amplitude or a longer period)",
+                                step, t, where(), speed, limits_.solid[m])
+                  : fmt::format("step {} (t = {:.6g} s): {} moves at {:.4g} m/s, faster than the P-wave speed "
+                                "{:.4g} m/s of its material: runaway velocity (reduce the solid dt)",
+                                step, t, where(), speed, limits_.solid[m]));
         if (!spec_.domain.contains(p_.position[i]))
           throw RunFailure(fmt::format("step {} (t = {:.6g} s): {} left the domain {}", step, t, where(),
                                        show_box(spec_.domain)));
@@ -500,11 +501,10 @@ class RunLoop {
     try {
       // A series never repeats a time: when the last good state is the last frame's (a failure in the first
       // steps after a frame), that frame is it.
-      if (writer_.n_frames() > 0 && writer_.frames().back().first == last_good_t_)
+      if (writer_.n_frames() > 0 && writer_.frames().back().first == last_good_t_) {
         frame = (std::filesystem::path(settings_.output_dir) / writer_.frames().back().second).string() + " (already written)";
-      else
+      } else {
         on_every_rank(comm_, [&] { writer_.write_piece(last_good_, last_good_t_); });
-      if (frame.empty()) {
         on_rank0(comm_, [&] { frame = writer_.commit_frame(last_good_t_); });
         if (rank_ != 0) writer_.commit_frame(last_good_t_);
       }
