@@ -32,6 +32,7 @@ std::vector<std::string> RunOptions::all_overrides() const {
   if (end_time) o.push_back(fmt::format("time.end={:.17g}", *end_time));
   if (dp) o.push_back(fmt::format("dp={:.17g}", *dp));
   if (subcycles) o.push_back("coupling.subcycles=" + *subcycles);
+  if (coupling) o.push_back("coupling.scheme=" + *coupling);
   o.insert(o.end(), overrides.begin(), overrides.end());
   return o;
 }

@@ -12,6 +12,7 @@ struct RunOptions {
   std::optional<double> end_time;
   std::optional<double> dp;
   std::optional<std::string> subcycles;
+  std::optional<std::string> coupling;  ///< --coupling: coupling.scheme
   std::string output;
   std::vector<std::string> overrides;
   bool overwrite = false;
@@ -21,7 +22,7 @@ struct RunOptions {
   int checkpoint_keep = 0;          ///< run: keep the newest N checkpoints (0: all)
   std::size_t max_steps = 0;        ///< run: stop after N steps (0: at the end time)
 
-  /// The command-line shortcuts (--end-time, --dp, --subcycles) as --set overrides, then the --set ones.
+  /// The command-line shortcuts (--end-time, --dp, --subcycles, --coupling) as --set overrides, then the --set ones.
   std::vector<std::string> all_overrides() const;
 };
 

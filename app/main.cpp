@@ -75,6 +75,8 @@ int main(int argc, char** argv) {
       ->check(positive_steps);
   run->add_option("--subcycles", run_opts.subcycles, "Solid sub-steps per fluid step: N or auto (overrides coupling.subcycles)")
       ->check(non_empty);
+  run->add_option("--coupling", run_opts.coupling, "Coupling scheme: explicit or implicit (overrides coupling.scheme)")
+      ->check(non_empty);
   run->add_option("--output", run_opts.output, "Output folder (default out/<case name>)")->check(non_empty);
   run->add_flag("--overwrite", run_opts.overwrite, "Allow writing into an existing output folder");
   run->add_flag("--quiet", run_opts.quiet, "Print only the summary and errors");

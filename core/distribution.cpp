@@ -153,6 +153,34 @@ struct Distribution::Impl {
   std::array<std::vector<LocalIndex>, 4> owned_of_kind;  ///< the owned particles of each kind at build_ghosts()
 };
 
+struct Distribution::Plan {
+  std::vector<std::vector<LocalIndex>> send_index;
+  std::vector<std::size_t> recv_count, recv_offset;
+  std::size_t plan_owned = 0, plan_ghost = 0;
+  bool have_plan = false;
+  std::vector<Vec> x_at_plan;
+  std::array<std::vector<LocalIndex>, 4> owned_of_kind;
+};
+
+std::shared_ptr<const Distribution::Plan> Distribution::save_plan() const {
+  const Impl& m = *impl_;
+  return std::make_shared<const Plan>(
+      Plan{m.send_index, m.recv_count, m.recv_offset, m.plan_owned, m.plan_ghost, m.have_plan, m.x_at_plan, m.owned_of_kind});
+}
+
+void Distribution::restore_plan(const std::shared_ptr<const Plan>& plan) {
+  if (!plan) throw std::logic_error("Distribution::restore_plan: no plan");
+  Impl& m = *impl_;
+  m.send_index = plan->send_index;
+  m.recv_count = plan->recv_count;
+  m.recv_offset = plan->recv_offset;
+  m.plan_owned = plan->plan_owned;
+  m.plan_ghost = plan->plan_ghost;
+  m.have_plan = plan->have_plan;
+  m.x_at_plan = plan->x_at_plan;
+  m.owned_of_kind = plan->owned_of_kind;
+}
+
 Distribution::Distribution(MPI_Comm comm, const DistributionSettings& settings)
     : impl_(std::make_unique<Impl>()), comm_(comm), settings_(settings) {
   MPI_Comm_rank(comm_, &rank_);

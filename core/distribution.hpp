@@ -139,6 +139,13 @@ class Distribution {
   const std::vector<Box>& regions() const { return regions_; }
   const DistributionStats& stats() const { return stats_; }
 
+  /// The ghost plan of the last build_ghosts() and the owned positions it was built at, for a caller that puts
+  /// the particles back to the state they had (a coupling iteration that repeats a step: ParticleSet::
+  /// assign_from): with restore_plan() the exchanges and needs_rebuild() behave as they did then.
+  struct Plan;
+  std::shared_ptr<const Plan> save_plan() const;
+  void restore_plan(const std::shared_ptr<const Plan>& plan);
+
  private:
   /// exchange_ghosts (to_owners false) and reverse_sum (true) over the plan of the last build_ghosts().
   void transfer(ParticleSet& p, const std::vector<std::string>& fields, bool to_owners,

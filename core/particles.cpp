@@ -147,6 +147,24 @@ void ParticleSet::drop_ghosts() {
   index_stale_ = true;
 }
 
+void ParticleSet::assign_from(const ParticleSet& saved) {
+  if (&saved == this) return;
+  if (saved.field_layout() != field_layout() || saved.bodies.size() != bodies.size())
+    throw std::logic_error("ParticleSet::assign_from: the saved set has other fields or bodies");
+  position = saved.position;
+  velocity = saved.velocity;
+  kind = saved.kind;
+  body = saved.body;
+  material = saved.material;
+  clamped = saved.clamped;
+  global_id = saved.global_id;
+  for (auto& [name, a] : scalar_fields_) a = saved.scalar_fields_.at(name);
+  for (auto& [name, a] : vector_fields_) a = saved.vector_fields_.at(name);
+  n_ghost_ = saved.n_ghost_;
+  next_id_ = saved.next_id_;
+  index_stale_ = true;
+}
+
 std::size_t ParticleSet::packed_size() const {
   std::size_t b = 0;
   for_each_array([&](const auto& a) { b += sizeof(typename std::decay_t<decltype(a)>::value_type); });

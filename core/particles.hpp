@@ -90,6 +90,10 @@ class ParticleSet {
 
   /// Removes the ghosts, leaving the owned particles.
   void drop_ghosts();
+  /// Puts back a copy taken earlier of this set (`ParticleSet saved = p;`): every array's values, the owned
+  /// and ghost counts. The arrays stay the same objects (references to fields remain valid). The copy must have
+  /// the same fields; otherwise throws std::logic_error and leaves this set unchanged.
+  void assign_from(const ParticleSet& saved);
   /// Bytes of one packed particle.
   std::size_t packed_size() const;
   /// Appends the packed particles `indices` (local indices, owned or ghost) to `out`.

@@ -1,6 +1,9 @@
 // The accelerations of an implicit coupling's iterations: constant relaxation, Aitken, IQN-ILS (acceleration.hpp).
 #include "coupling/acceleration.hpp"
 
+#include "core/binary_io.hpp"
+#include "core/collectives.hpp"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
@@ -8,8 +11,21 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 namespace mpsfsi {
+
+void Acceleration::save_state(BinaryWriter& out) const {
+  out.section("acceleration");
+  out.string(name());
+}
+
+void Acceleration::load_state(BinaryReader& in, const std::vector<GlobalId>&) {
+  in.expect_section("acceleration");
+  const std::string got = in.string("the acceleration");
+  if (got != name()) in.fail("the checkpoint's acceleration is " + got + ", this run's " + name());
+  iteration_ = 0;
+}
 
 Real global_dot(const DataVector& a, const DataVector& b, MPI_Comm comm) {
   Real d = a.dot(b);
@@ -76,6 +92,14 @@ class AitkenRelaxation : public Acceleration {
   }
   void end_window() override { iteration_ = 0; }
   std::string name() const override { return "aitken"; }
+  void save_state(BinaryWriter& out) const override {
+    Acceleration::save_state(out);
+    out.f64(omega_);
+  }
+  void load_state(BinaryReader& in, const std::vector<GlobalId>& ids) override {
+    Acceleration::load_state(in, ids);
+    omega_ = in.f64("Aitken's factor");
+  }
 
  private:
   Real initial_, omega_;
@@ -187,6 +211,58 @@ void IqnIlsAcceleration::end_window() {
   current_ = Window{};
   while (past_.size() > static_cast<std::size_t>(parameters_.reuse)) past_.pop_back();
   iteration_ = 0;
+}
+
+void IqnIlsAcceleration::save_state(BinaryWriter& out) const {
+  if (iteration_ != 0) throw std::logic_error("IQN-ILS: save_state within a window");
+  Acceleration::save_state(out);
+  MPI_Comm comm = comm_;
+  std::vector<std::int64_t> mine(ids_.begin(), ids_.end());
+  out.array(all_gather(comm, mine));
+  out.u64(past_.size());
+  for (const Window& win : past_) {
+    out.u64(win.v.size());
+    for (const auto* columns : {&win.v, &win.w})
+      for (const DataVector& col : *columns)
+        out.array(all_gather(comm, std::vector<double>(col.data(), col.data() + col.size())));
+  }
+  out.i64(dropped_by_ids_);
+}
+
+void IqnIlsAcceleration::load_state(BinaryReader& in, const std::vector<GlobalId>& ids) {
+  Acceleration::load_state(in, ids);
+  const std::vector<std::int64_t> all_ids = in.array<std::int64_t>("the IQN-ILS interface ids");
+  std::unordered_map<GlobalId, std::size_t> row_of;
+  for (std::size_t r = 0; r < all_ids.size(); ++r) row_of[static_cast<GlobalId>(all_ids[r])] = r;
+  bool mapped = true;
+  std::vector<std::size_t> rows;
+  for (const GlobalId id : ids) {
+    const auto it = row_of.find(id);
+    mapped = mapped && it != row_of.end();
+    rows.push_back(it == row_of.end() ? 0 : it->second);
+  }
+  const std::size_t n_windows = in.u64("the IQN-ILS windows");
+  std::deque<Window> past;
+  const auto w = static_cast<std::size_t>(width_);
+  for (std::size_t k = 0; k < n_windows; ++k) {
+    const std::size_t n_columns = in.u64("the IQN-ILS columns");
+    Window win;
+    for (auto* columns : {&win.v, &win.w})
+      for (std::size_t q = 0; q < n_columns; ++q) {
+        const std::vector<double> all = in.array<double>("an IQN-ILS column", all_ids.size() * w);
+        DataVector col(static_cast<Eigen::Index>(ids.size() * w));
+        for (std::size_t i = 0; i < ids.size(); ++i)
+          for (std::size_t a = 0; a < w; ++a) col(static_cast<Eigen::Index>(i * w + a)) = all[rows[i] * w + a];
+        columns->push_back(std::move(col));
+      }
+    past.push_back(std::move(win));
+  }
+  dropped_by_ids_ = in.i64("the dropped-column count");
+  int all_mapped = mapped ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &all_mapped, 1, MPI_INT, MPI_MIN, comm_);
+  current_ = Window{};
+  past_ = all_mapped ? std::move(past) : std::deque<Window>{};
+  ids_ = ids;
 }
 
 std::unique_ptr<Acceleration> make_acceleration(const AccelerationParameters& parameters, const int width, MPI_Comm comm) {

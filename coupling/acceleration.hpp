@@ -32,6 +32,9 @@
 
 namespace mpsfsi {
 
+class BinaryWriter;
+class BinaryReader;
+
 /// Interface data: this rank's entries, `width` values per interface id.
 using DataVector = Eigen::VectorXd;
 
@@ -61,6 +64,13 @@ class Acceleration {
   /// The name used in the case file (constant, aitken, iqn-ils).
   virtual std::string name() const = 0;
 
+  /// Checkpoints, between windows: what the acceleration carries from one window to the next (Aitken's factor,
+  /// IQN-ILS's kept columns by interface id). save_state is a collective: every rank's columns go into `out`
+  /// on every rank. load_state keeps the rows of `ids`, this rank's interface now (any partition); columns it
+  /// cannot map (an id the checkpoint lacks) are dropped.
+  virtual void save_state(BinaryWriter& out) const;
+  virtual void load_state(BinaryReader& in, const std::vector<GlobalId>& ids);
+
  protected:
   int iteration_ = 0;
 };
@@ -78,6 +88,8 @@ class IqnIlsAcceleration : public Acceleration {
   DataVector next(const std::vector<GlobalId>& ids, const DataVector& x, const DataVector& hx) override;
   void end_window() override;
   std::string name() const override { return "iqn-ils"; }
+  void save_state(BinaryWriter& out) const override;
+  void load_state(BinaryReader& in, const std::vector<GlobalId>& ids) override;
 
   /// Columns the least squares may use now (this window's and the kept ones of past windows), before filtering.
   int columns() const;

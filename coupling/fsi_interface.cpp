@@ -2,6 +2,7 @@
 #include "coupling/fsi_interface.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/collectives.hpp"
 #include "core/distribution.hpp"
 #include "core/files.hpp"
 #include "core/kernel.hpp"
@@ -13,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace mpsfsi {
 
@@ -120,20 +122,97 @@ void FsiInterface::initialize() {
 }
 
 void FsiInterface::prepare_fluid_boundary(const Real dt) {
+  if (!(opt_.midstep_predictor && dt > 0 && has_mean_v_)) {
+    view_solid(nullptr);
+    return;
+  }
+  const auto& mean_v = p_.vector_field(field::mean_v);
+  const SolidView at_mid_step = [&](std::size_t, const std::size_t i) {
+    return std::pair<Vec, Vec>(0.5 * dt * mean_v[i], mean_v[i]);
+  };
+  view_solid(&at_mid_step);
+}
+
+void FsiInterface::prepare_fluid_boundary(const Real dt, const Eigen::VectorXd& displacement) {
+  if (!(dt > 0)) throw std::invalid_argument("FsiInterface::prepare_fluid_boundary: dt must be positive");
+  std::size_t n_solid = 0;
+  for (std::size_t i = 0; i < p_.n_owned(); ++i) n_solid += p_.kind[i] == ParticleKind::solid ? 1 : 0;
+  if (static_cast<std::size_t>(displacement.size()) != dim * n_solid)
+    throw std::logic_error(fmt::format("FsiInterface::prepare_fluid_boundary: {} displacement values for {} owned solid "
+                                       "particles", displacement.size(), n_solid));
+  const SolidView at_mid_step = [&](const std::size_t k, std::size_t) {
+    const Vec d = displacement.segment<dim>(static_cast<Eigen::Index>(dim * k));
+    return std::pair<Vec, Vec>(0.5 * d, d / dt);
+  };
+  view_solid(&at_mid_step);
+}
+
+std::vector<GlobalId> FsiInterface::solid_ids() const {
+  std::vector<GlobalId> ids;
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) ids.push_back(p_.global_id[i]);
+  return ids;
+}
+
+Eigen::VectorXd FsiInterface::predicted_displacement(const Real dt) const {
+  const std::vector<GlobalId> ids = solid_ids();
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(dim * ids.size()));
+  if (!has_mean_v_) return d;
+  const auto& mean_v = p_.vector_field(field::mean_v);
+  Eigen::Index k = 0;
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) d.segment<dim>(dim * k++) = dt * mean_v[i];
+  return d;
+}
+
+Eigen::VectorXd FsiInterface::step_displacement(const std::vector<GlobalId>& ids) const {
+  const auto& start_x = p_.vector_field(field::start_x);
+  std::unordered_map<GlobalId, Vec> mine;
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) mine.emplace(p_.global_id[i], p_.position[i] - start_x[i]);
+  int missing = 0;
+  for (const GlobalId id : ids) missing = missing || !mine.count(id);
+  if (dist_ && dist_->n_ranks() > 1) {
+    MPI_Allreduce(MPI_IN_PLACE, &missing, 1, MPI_INT, MPI_MAX, dist_->comm());
+    if (missing) {  // some solid particle changed its rank within the step: every rank's (id, d) to every rank
+      std::vector<double> flat;
+      for (const auto& [id, d] : mine) {
+        flat.push_back(static_cast<double>(id));
+        for (int a = 0; a < dim; ++a) flat.push_back(d[a]);
+      }
+      const std::vector<double> all = all_gather(dist_->comm(), flat);
+      for (std::size_t q = 0; q + dim < all.size(); q += dim + 1) {
+        Vec d;
+        for (int a = 0; a < dim; ++a) d[a] = all[q + 1 + static_cast<std::size_t>(a)];
+        mine.emplace(static_cast<GlobalId>(all[q]), d);
+      }
+    }
+  }
+  Eigen::VectorXd out(static_cast<Eigen::Index>(dim * ids.size()));
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const auto it = mine.find(ids[k]);
+    if (it == mine.end()) throw std::logic_error(fmt::format("FsiInterface::step_displacement: solid particle {} not found", ids[k]));
+    out.segment<dim>(static_cast<Eigen::Index>(dim * k)) = it->second;
+  }
+  return out;
+}
+
+void FsiInterface::view_solid(const SolidView* view) {
   if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
   if (!p_.has_scalar_field(opt_.flag_field))
     throw std::logic_error("FsiInterface: the solid does not publish its surface flag '" + opt_.flag_field + "'");
-  predicted_ = opt_.midstep_predictor && dt > 0 && has_mean_v_;
+  predicted_ = view != nullptr;
   if (predicted_) {
     auto& saved_x = p_.vector_field(field::saved_x);
     auto& saved_v = p_.vector_field(field::saved_v);
-    const auto& mean_v = p_.vector_field(field::mean_v);
+    std::size_t k = 0;
     for (std::size_t i = 0; i < p_.n_owned(); ++i) {
       if (p_.kind[i] != ParticleKind::solid) continue;
       saved_x[i] = p_.position[i];
       saved_v[i] = p_.velocity[i];
-      p_.position[i] += 0.5 * dt * mean_v[i];
-      p_.velocity[i] = mean_v[i];
+      const auto [offset, velocity] = (*view)(k++, i);
+      p_.position[i] += offset;
+      p_.velocity[i] = velocity;
     }
   }
   if (!opt_.freeze_solid_density) return;

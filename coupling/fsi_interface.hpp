@@ -37,8 +37,12 @@
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 
+#include <Eigen/Core>
+
 #include <fstream>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mpsfsi {
@@ -105,8 +109,22 @@ class FsiInterface {
   /// (n_i^0)_solid of every solid particle from the current (initial) configuration, and the bodies.
   void initialize();
   /// (a) Checks that the solid publishes its surface flag (the fluid reads it at its next step) and, with
-  /// freeze_solid_density, writes the density offset of the solid particles.
+  /// freeze_solid_density, writes the density offset of the solid particles. With midstep_predictor the
+  /// fluid sees the solid at x + u dt / 2 with velocity u, u its mean velocity over the last step.
   void prepare_fluid_boundary(Real dt = 0);
+  /// (a) for an iteration of an implicit coupling: the fluid sees the solid at x + d / 2 with velocity d / dt,
+  /// d the solid's displacement over the coming step (this rank's owned solid particles, dim values each, in
+  /// the order of solid_ids()). restore_solid() puts the solid's own state back after the fluid step.
+  void prepare_fluid_boundary(Real dt, const Eigen::VectorXd& displacement);
+  /// The global ids of this rank's owned solid particles, in local order: the entries of the interface data.
+  std::vector<GlobalId> solid_ids() const;
+  /// The displacement the solid would make over a step of dt at its mean velocity of the last step (zero
+  /// before the first step), in the order of solid_ids(): the first iterate of an implicit coupling.
+  Eigen::VectorXd predicted_displacement(Real dt) const;
+  /// After advance_solid: each solid particle's displacement over it, in the order of `ids` (this rank's
+  /// solid_ids() when the step began; particles that moved to another rank meanwhile are fetched from it).
+  /// A collective.
+  Eigen::VectorXd step_displacement(const std::vector<GlobalId>& ids) const;
   /// After the fluid step: the solid's own positions and velocities back (midstep_predictor).
   void restore_solid();
   /// (b) Eq. 50 from the current pressures into the load field; totals per body.
@@ -133,6 +151,10 @@ class FsiInterface {
  private:
   /// Owners and ghosts current (migration when due, else the solid ghosts' positions and velocities refreshed).
   void sync();
+  /// The fluid's view of the k-th owned solid particle i: the offset of its position and its velocity.
+  using SolidView = std::function<std::pair<Vec, Vec>(std::size_t k, std::size_t i)>;
+  /// The fluid's view of the solid (nullptr: the solid as it is), then the density offsets.
+  void view_solid(const SolidView* view);
   /// Sums the per-body force and wetted count (after compute_load) or work (after advance_solid) over the ranks.
   void reduce_bodies(bool force);
 

@@ -14,6 +14,7 @@
 #include "core/output_lock.hpp"
 #include "core/text.hpp"
 #include "coupling/checkpoint.hpp"
+#include "coupling/coupling_scheme.hpp"
 #include "coupling/fsi_interface.hpp"
 #include "coupling/rank0.hpp"
 
@@ -134,6 +135,7 @@ class RunLoop {
       solid_->set_damping(spec.coupling.solid_damping);
       coupling_ = std::make_unique<FsiInterface>(spec, p_, fo, dist_.get());
       coupling_->initialize();
+      scheme_ = make_coupling_scheme(spec.coupling, CouplingParticipants{spec.dp, p_, *dist_, *fluid_, *solid_, *coupling_});
       on_rank0(comm, [&] { coupling_->open_csv(settings.output_dir + "/interface.csv", appends("interface.csv")); });
     }
     check_output_fields();
@@ -223,10 +225,16 @@ class RunLoop {
           "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
           "\"coupling\":{:.3f},\"output\":{:.3f},\"removed\":{},\"subcycles_raised_steps\":{},"
           "\"peak_memory_kib\":{},\"dt_min\":{:.6g},\"t_of_dt_min\":{:.9g},\"limit_of_dt_min\":\"{}\","
-          "\"steps_by_limit\":{{{}}}}}\n",
+          "\"steps_by_limit\":{{{}}}{}}}\n",
           step_, t_, summary_.wall_seconds, summary_.t_fluid, summary_.t_solid, summary_.t_coupling, summary_.t_output,
           summary_.n_removed, summary_.n_subcycles_raised, summary_.peak_memory_kib, summary_.dt_min,
-          summary_.t_of_dt_min, summary_.limit_of_dt_min, by_limit);
+          summary_.t_of_dt_min, summary_.limit_of_dt_min, by_limit,
+          summary_.coupling_windows > 0
+              ? fmt::format(",\"coupling_iterations\":{},\"coupling_iterations_max\":{},\"coupling_windows\":{},"
+                            "\"coupling_unconverged\":{}",
+                            summary_.coupling_iterations, summary_.coupling_iterations_max, summary_.coupling_windows,
+                            summary_.n_unconverged)
+              : std::string());
     }
     return summary_;
   }
@@ -299,33 +307,28 @@ class RunLoop {
       summary_.t_fluid += seconds_since(t0);
     }
     try {
-      if (coupling_) {
-        const auto t0 = Clock::now();
-        coupling_->prepare_fluid_boundary(dt);  // (a)
-        summary_.t_coupling += seconds_since(t0);
-      }
-      if (fluid_) {
+      if (scheme_) {  // fluid, load, solid: coupling/coupling_scheme.hpp
+        const CouplingWindow w = scheme_->advance(t_, dt, n_sub);
+        last_fluid_ = w.fluid;
+        summary_.t_fluid += w.t_fluid;
+        summary_.t_solid += w.t_solid;
+        summary_.t_coupling += w.t_coupling;
+        note_window(w);
+      } else if (fluid_) {
         const auto t0 = Clock::now();
         last_fluid_ = fluid_->advance(t_, dt);
-        if (coupling_) coupling_->restore_solid();
         summary_.t_fluid += seconds_since(t0);
-        summary_.n_removed += last_fluid_.n_removed;
-        if (last_fluid_.n_removed > 0 && log_)
-          fmt::print("{}step {}: {} fluid particle(s) left the domain and were removed ({} so far)\n", tty_ ? "\n" : "",
-                     step_ + 1, last_fluid_.n_removed, summary_.n_removed);
-      }
-      if (coupling_) {
-        auto t0 = Clock::now();
-        coupling_->compute_load();  // (b)
-        summary_.t_coupling += seconds_since(t0);
-        t0 = Clock::now();
-        coupling_->advance_solid(*solid_, t_, dt, n_sub);  // (c), (d): kinematics in the shared set
-        summary_.t_solid += seconds_since(t0);
       } else if (solid_) {
         const auto t0 = Clock::now();
         const Real dts = dt / n_sub;
         for (int k = 0; k < n_sub; ++k) solid_->advance(t_ + k * dts, dts);
         summary_.t_solid += seconds_since(t0);
+      }
+      if (fluid_) {
+        summary_.n_removed += last_fluid_.n_removed;
+        if (last_fluid_.n_removed > 0 && log_)
+          fmt::print("{}step {}: {} fluid particle(s) left the domain and were removed ({} so far)\n", tty_ ? "\n" : "",
+                     step_ + 1, last_fluid_.n_removed, summary_.n_removed);
       }
     } catch (const RunFailure& e) {
       fail_within_step(e.what());
@@ -348,6 +351,30 @@ class RunLoop {
     limit_ = limit;
     summary_.last_subcycles = n_sub;
     summary_.last_solid_dt = dt / n_sub;
+  }
+
+  /// The implicit coupling's iterations of the window into the summary; a window that did not converge is
+  /// said once and counted, or stops the run (coupling.implicit.on_max_iterations).
+  void note_window(const CouplingWindow& w) {
+    last_window_ = w;
+    if (scheme_->name() != "implicit") return;
+    summary_.coupling_iterations += static_cast<std::size_t>(w.iterations);
+    summary_.coupling_iterations_max = std::max(summary_.coupling_iterations_max, w.iterations);
+    ++summary_.coupling_windows;
+    if (w.converged) return;
+    ++summary_.n_unconverged;
+    const ImplicitCouplingParameters& ic = spec_.coupling.implicit;
+    const std::string what = fmt::format(
+        "step {} (t = {:.6g} s): the implicit coupling did not converge in coupling.implicit.max_iterations = {} "
+        "(residual {:.3g}, tolerance {:.3g})",
+        step_ + 1, t_, ic.max_iterations, w.residual, ic.tolerance);
+    if (ic.on_max_iterations == NonConvergence::stop)
+      throw RunFailure(what + "; coupling.implicit.on_max_iterations = stop (raise max_iterations, loosen the tolerance, "
+                              "or choose another acceleration)");
+    if (!unconverged_said_ && log_)
+      fmt::print("{}{}; the run goes on with the last iterate (said once; the summary counts such steps)\n",
+                 tty_ ? "\n" : "", what);
+    unconverged_said_ = true;
   }
 
   /// Non-finite state, runaway speed, solid particles leaving the domain: the first offender is named.
@@ -601,6 +628,8 @@ class RunLoop {
     if (fluid_) ppe = fmt::format(", PPE {} it (res {:.1e})", last_fluid_.iterations, last_fluid_.residual);
     if (fluid_ && solid_)
       sub = fmt::format(", subcycles {} (solid dt {:.2e} s)", summary_.last_subcycles, summary_.last_solid_dt);
+    const bool implicit = scheme_ && scheme_->name() == "implicit";
+    if (implicit) sub += fmt::format(", coupling {} it (res {:.1e})", last_window_.iterations, last_window_.residual);
     const std::string line = fmt::format("t = {:.5f} s ({:5.1f} %), step {}, {:.1f} steps/s, ETA {}, dt {:.2e} s ({}){}{}",
                                          t_, 100 * frac, step_, rate, format_duration(eta), dt_, limit_, ppe, sub);
     // A step is logged once: the final line of a run that ends on a periodic step is not written again.
@@ -609,8 +638,12 @@ class RunLoop {
       logged_step_ = step_;
       jsonl_ << fmt::format(
           "{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\",\"ppe_iterations\":{},"
-          "\"ppe_solves\":{},\"ppe_residual\":{:.3g},\"subcycles\":{},\"wall\":{:.3f}}}\n",
-          step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.solves, last_fluid_.residual, summary_.last_subcycles, wall);
+          "\"ppe_solves\":{},\"ppe_residual\":{:.3g},\"subcycles\":{},{}\"wall\":{:.3f}}}\n",
+          step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.solves, last_fluid_.residual, summary_.last_subcycles,
+          implicit ? fmt::format("\"coupling_iterations\":{},\"coupling_residual\":{:.3g},\"coupling_converged\":{},",
+                                 last_window_.iterations, last_window_.residual, last_window_.converged)
+                   : std::string(),
+          wall);
       jsonl_.flush();  // `tail -f run.jsonl` follows the run
       if (!jsonl_ && log_error_.empty()) log_error_ = "cannot write run log '" + settings_.output_dir + "/run.jsonl'";
     }
@@ -680,18 +713,19 @@ class RunLoop {
   void write_checkpoint_now() {
     try {
       const ParticleSet all = dist_->gather(p_, 0);  // rank 0: every particle, rank by rank
-      BinaryWriter distribution;
+      BinaryWriter distribution, scheme;
       dist_->save_state(distribution, p_, 0);
+      if (scheme_) scheme_->save_state(scheme);  // a collective
       on_rank0(comm_, [&] {
         check_output_folder();
-        write_checkpoint_on_rank0(all, distribution);
+        write_checkpoint_on_rank0(all, distribution, scheme);
       });
     } catch (const OutputError& e) {
       throw OutputError(stopped_by_output(e.what()));
     }
   }
 
-  void write_checkpoint_on_rank0(const ParticleSet& all, const BinaryWriter& distribution) {
+  void write_checkpoint_on_rank0(const ParticleSet& all, const BinaryWriter& distribution, const BinaryWriter& scheme) {
     const auto t0 = Clock::now();
     BinaryWriter w;
     save_run_state(w);
@@ -700,6 +734,7 @@ class RunLoop {
     if (fluid_) fluid_->save_state(w);
     if (solid_) solid_->save_state(w);
     if (coupling_) coupling_->save_state(w);
+    w.bytes() += scheme.bytes();
     w.section("end");
     jsonl_.flush();
     receivers_.flush();
@@ -767,6 +802,7 @@ class RunLoop {
       if (fluid_) exact_ = fluid_->load_state(in);
       if (solid_) solid_->load_state(in);
       if (coupling_) coupling_->load_state(in);
+      if (scheme_) scheme_->load_state(in);
       in.expect_section("end");
       if (!in.at_end()) in.fail("unexpected data after the state");
     } catch (const StateFormatError& e) {
@@ -836,6 +872,9 @@ class RunLoop {
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<SolidSolver> solid_;
   std::unique_ptr<FsiInterface> coupling_;
+  std::unique_ptr<CouplingScheme> scheme_;
+  CouplingWindow last_window_;         ///< the last coupled window (iterations, residual)
+  bool unconverged_said_ = false;
   bool raised_said_ = false;
   std::ofstream jsonl_;
   int rank_ = 0;
@@ -948,6 +987,10 @@ std::string format_summary(const RunSummary& s) {
                         s.limit_of_dt_min);
     for (const auto& [name, n] : s.steps_by_limit) text += fmt::format(" {} {}", name, n);
   }
+  if (s.coupling_windows > 0)
+    text += fmt::format("\n  implicit coupling: {:.2f} iterations per step (at most {}), {} step(s) not converged",
+                        static_cast<double>(s.coupling_iterations) / static_cast<double>(s.coupling_windows),
+                        s.coupling_iterations_max, s.n_unconverged);
   if (s.n_removed > 0) text += fmt::format("\n  {} fluid particles left the domain and were removed", s.n_removed);
   text += "\n  series " + s.pvd_path;
   return text;

@@ -67,6 +67,10 @@ struct RunSummary {
   Real dt_min = 0, t_of_dt_min = 0;
   std::string limit_of_dt_min;
   std::string pvd_path;
+  /// The implicit coupling (this session's steps): iterations in all and at most per step, steps, and steps that
+  /// did not converge in coupling.implicit.max_iterations.
+  std::size_t coupling_iterations = 0, coupling_windows = 0, n_unconverged = 0;
+  int coupling_iterations_max = 0;
   /// The signal (SIGINT, SIGTERM) that stopped the run at the end of a step; 0 if it ran to its end.
   int interrupted_by = 0;
 };

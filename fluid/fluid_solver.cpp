@@ -1123,6 +1123,10 @@ bool FluidSolver::load_state(BinaryReader& in) {
   return exact;
 }
 
+FluidSolver::IterationState FluidSolver::iteration_state() const { return {impl_->n_steps}; }
+
+void FluidSolver::restore(const IterationState& state) { impl_->n_steps = state.n_steps; }
+
 std::size_t FluidSolver::memory_bytes() const {
   const Impl& m = *impl_;
   std::size_t bytes = m.nl.memory_bytes() + m.near.memory_bytes();

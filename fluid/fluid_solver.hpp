@@ -112,6 +112,15 @@ class FluidSolver {
   /// PressureSolver::load_state).
   bool load_state(BinaryReader& in);
 
+  /// What a coupling iteration needs to repeat a step besides the particle arrays (which the caller keeps):
+  /// the step count (the first step is the start from rest). The pressure solver's state is left as it is: it
+  /// changes the iterations of a solve, not its answer beyond the tolerance.
+  struct IterationState {
+    std::size_t n_steps = 0;
+  };
+  IterationState iteration_state() const;
+  void restore(const IterationState& state);
+
   /// Diagnostics and tests: this rank's rows of the last pressure system, the particle (local index at
   /// the time of the solve) of each row, and the lattice constants used (density/gradient, Laplacian).
   const LocalRows& last_system() const;

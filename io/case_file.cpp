@@ -970,6 +970,26 @@ void read_coupling(MapReader r, CouplingParameters& c) {
                              "a number >= 0 (solid bond damping time in units of dp / c_p)");
   c.load_relaxation = r.number("load_relaxation", c.load_relaxation, [](Real x) { return x > 0 && x <= 1; },
                                "a number in (0, 1] (under-relaxation of the interface load in time)");
+  c.scheme = r.option("scheme", c.scheme, coupling_scheme_names());
+  MapReader im = r.optional_map(
+      "implicit", "a map {acceleration, relaxation, tolerance, max_iterations, reuse, max_columns, filter, on_max_iterations}");
+  ImplicitCouplingParameters& ic = c.implicit;
+  AccelerationParameters& a = ic.acceleration;
+  a.kind = im.option("acceleration", a.kind, acceleration_kind_names());
+  a.relaxation = im.number("relaxation", a.relaxation, [](Real x) { return x > 0 && x <= 1; },
+                           "a number in (0, 1] (the relaxation factor of the first iteration)");
+  ic.tolerance = im.number("tolerance", ic.tolerance, [](Real x) { return x > 0 && x < 1; },
+                           "a number in (0, 1) (relative change of the solid's displacement between iterations)");
+  ic.max_iterations = im.integer("max_iterations", ic.max_iterations, [](long long n) { return n >= 1 && n <= 1000; },
+                                 "an integer from 1 to 1000 (coupled steps per time step at most)");
+  a.reuse = im.integer("reuse", a.reuse, [](long long n) { return n >= 0 && n <= 1000; },
+                       "an integer from 0 to 1000 (past time steps whose IQN-ILS columns are kept)");
+  a.max_columns = im.integer("max_columns", a.max_columns, [](long long n) { return n >= 1 && n <= 10000; },
+                             "an integer from 1 to 10000 (IQN-ILS columns at most)");
+  a.filter = im.number("filter", a.filter, [](Real x) { return x >= 0 && x < 1; },
+                       "a number in [0, 1) (IQN-ILS: a column nearly dependent on the newer ones by this share is left out)");
+  ic.on_max_iterations = im.option("on_max_iterations", ic.on_max_iterations, non_convergence_names());
+  im.finish();
   r.finish();
 }
 
@@ -1348,7 +1368,7 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   check_geometry(src, spec, geometry, top.at("dp"));
 
   read_tank_motion(top.optional_map("tank_motion", "a map {type: none | sine_roll | table, ...}"), base_dir, spec);
-  read_coupling(top.optional_map("coupling", "a map {subcycles, solid_damping, load_relaxation}"), spec.coupling);
+  read_coupling(top.optional_map("coupling", "a map {scheme, implicit, subcycles, solid_damping, load_relaxation}"), spec.coupling);
   read_parallel(top.optional_map("parallel", "a map {partition, imbalance, skin}"), spec.parallel);
   read_fluid_numerics(top.optional_map("fluid", "a map of fluid numerics {re_gradient, re_laplacian, ...}"), spec.tank_motion,
                       spec.fluid);

@@ -978,6 +978,13 @@ void SolidSolver::load_state(BinaryReader& in) {
   impl_->seen_gid.clear();  // the particle set was replaced: renew the structure at the next use
 }
 
+SolidSolver::IterationState SolidSolver::iteration_state() const { return {impl_->n_broken}; }
+
+void SolidSolver::restore(const IterationState& state) {
+  impl_->n_broken = state.n_broken;
+  impl_->seen_gid.clear();  // the particle arrays were put back: renew the structure at the next use
+}
+
 void SolidSolver::prepare_output(const Real t) {
   Impl& m = *impl_;
   m.compute_fragments();  // (renews owners, ghosts and bonds first)

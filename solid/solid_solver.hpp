@@ -104,6 +104,14 @@ class SolidSolver {
   void save_state(BinaryWriter& out) const;
   void load_state(BinaryReader& in);
 
+  /// What a coupling iteration needs to repeat a step besides the particle arrays (which the caller keeps and
+  /// puts back): the count of broken bonds. restore() renews the bonds from the particle arrays at the next use.
+  struct IterationState {
+    std::size_t n_broken = 0;
+  };
+  IterationState iteration_state() const;
+  void restore(const IterationState& state);
+
   SolidDiagnostics diagnostics() const;
   /// Number of fragments (connected components of intact bonds) at the last prepare_output or
   /// min_distance_between_fragments (0 before).

@@ -211,6 +211,10 @@ TEST(CaseFile, MinimalCaseGetsTheDefaults) {
   EXPECT_EQ(c.coupling.subcycles, 1);
   EXPECT_DOUBLE_EQ(c.coupling.solid_damping, 0.5);
   EXPECT_DOUBLE_EQ(c.coupling.load_relaxation, 1.0);
+  EXPECT_EQ(c.coupling.scheme, CouplingSchemeKind::explicit_scheme);
+  EXPECT_EQ(c.coupling.implicit.acceleration.kind, AccelerationKind::iqn_ils);
+  EXPECT_DOUBLE_EQ(c.coupling.implicit.tolerance, 1e-3);
+  EXPECT_EQ(c.coupling.implicit.max_iterations, 20);
   EXPECT_EQ(c.fluid.scheme, FluidScheme::projection);
   EXPECT_DOUBLE_EQ(c.fluid.projection_stabilisation, 1.0);
   EXPECT_DOUBLE_EQ(c.fluid.projection_radius, 2.0);
@@ -397,6 +401,20 @@ TEST(CaseFileErrors, OutOfRangeValues) {
               HasSubstr("coupling.solid_damping = -1: expected a number >= 0"));
   EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, load_relaxation: 0")),
               HasSubstr("coupling.load_relaxation = 0: expected a number in (0, 1]"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, scheme: strong")),
+              HasSubstr("coupling.scheme = strong: expected one of: explicit, implicit"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, implicit: {acceleration: broyden}")),
+              HasSubstr("coupling.implicit.acceleration = broyden: expected one of: constant, aitken, iqn-ils"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, implicit: {tolerance: 1}")),
+              HasSubstr("coupling.implicit.tolerance = 1: expected a number in (0, 1)"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, implicit: {max_iterations: 0}")),
+              HasSubstr("coupling.implicit.max_iterations = 0: expected an integer from 1 to 1000"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, implicit: {on_max_iterations: abort}")),
+              HasSubstr("coupling.implicit.on_max_iterations = abort: expected one of: continue, stop"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, implicit: {reuse: -1}")),
+              HasSubstr("coupling.implicit.reuse = -1: expected an integer from 0 to 1000"));
+  EXPECT_THAT(error_of(valid_with("subcycles: auto", "subcycles: auto, implicit: 3")),
+              HasSubstr("coupling.implicit"));
   EXPECT_THAT(error_of(valid_with("solver: gmres", "solver: bicgstab")),
               HasSubstr("fluid.solver = bicgstab: expected one of: cg, gmres"));
   EXPECT_THAT(error_of(valid_with("  solver: gmres", "  solver: gmres\n  density_tolerance: -1e-6")),
@@ -671,6 +689,13 @@ TEST(CaseFileOverrides, ValuesListsIndexesNames) {
   EXPECT_EQ(parse_case(minimal_case, file_name, {"coupling.subcycles=auto"}).coupling.subcycles, 0);
   EXPECT_DOUBLE_EQ(parse_case(minimal_case, file_name, {"coupling.solid_damping=2"}).coupling.solid_damping, 2.0);
   EXPECT_EQ(parse_case(valid_text(), file_name, {"coupling.subcycles=7"}).coupling.subcycles, 7);
+  const CaseSpec implicit = parse_case(valid_text(), file_name,
+                                       {"coupling.scheme=implicit", "coupling.implicit.acceleration=aitken",
+                                        "coupling.implicit.relaxation=0.3", "coupling.implicit.on_max_iterations=stop"});
+  EXPECT_EQ(implicit.coupling.scheme, CouplingSchemeKind::implicit_scheme);
+  EXPECT_EQ(implicit.coupling.implicit.acceleration.kind, AccelerationKind::aitken);
+  EXPECT_DOUBLE_EQ(implicit.coupling.implicit.acceleration.relaxation, 0.3);
+  EXPECT_EQ(implicit.coupling.implicit.on_max_iterations, NonConvergence::stop);
   // A later override wins; ~ removes an optional key.
   const CaseSpec d = parse_case(valid_text(), file_name, {"dp=0.01", "dp=0.002", "time.cfl=~", "time.dt_max=~", "time.dt=1e-4"});
   EXPECT_DOUBLE_EQ(d.dp, 0.002);
