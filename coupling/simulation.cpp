@@ -306,6 +306,7 @@ class RunLoop {
       if (dist_->imbalance(p_, w) > dist_->settings().imbalance_threshold) dist_->partition(p_, w);
       summary_.t_fluid += seconds_since(t0);
     }
+    std::string window_finding;  // the implicit coupling's verdict, the same on every rank
     try {
       if (scheme_) {  // fluid, load, solid: coupling/coupling_scheme.hpp
         const CouplingWindow w = scheme_->advance(t_, dt, n_sub);
@@ -313,7 +314,7 @@ class RunLoop {
         summary_.t_fluid += w.t_fluid;
         summary_.t_solid += w.t_solid;
         summary_.t_coupling += w.t_coupling;
-        note_window(w);
+        window_finding = note_window(w);
       } else if (fluid_) {
         const auto t0 = Clock::now();
         last_fluid_ = fluid_->advance(t_, dt);
@@ -336,12 +337,14 @@ class RunLoop {
       fail_within_step(fmt::format("step {} (t = {:.6g} s): {}", step_ + 1, t_, e.what()));
     }
     // The state checks: each rank looks at its particles, the first finding stops every rank.
-    std::string finding;
-    try {
-      check_state(step_ + 1, t_ + dt);
-      if (last_fluid_.n_removed > 0) check_losses(step_ + 1, t_ + dt);
-    } catch (const RunFailure& e) {
-      finding = e.what();
+    std::string finding = window_finding;
+    if (finding.empty()) {  // (the window's verdict is every rank's: all skip the checks alike)
+      try {
+        check_state(step_ + 1, t_ + dt);
+        if (last_fluid_.n_removed > 0) check_losses(step_ + 1, t_ + dt);
+      } catch (const RunFailure& e) {
+        finding = e.what();
+      }
     }
     finding = agreed_message(comm_, finding);
     if (!finding.empty()) fail(finding);
@@ -354,14 +357,15 @@ class RunLoop {
   }
 
   /// The implicit coupling's iterations of the window into the summary; a window that did not converge is
-  /// said once and counted, or stops the run (coupling.implicit.on_max_iterations).
-  void note_window(const CouplingWindow& w) {
+  /// said once and counted, or (coupling.implicit.on_max_iterations: stop) returned as the finding that stops
+  /// the run (every rank has the same verdict: the residual is reduced over the ranks).
+  std::string note_window(const CouplingWindow& w) {
     last_window_ = w;
-    if (scheme_->name() != "implicit") return;
+    if (scheme_->name() != "implicit") return {};
     summary_.coupling_iterations += static_cast<std::size_t>(w.iterations);
     summary_.coupling_iterations_max = std::max(summary_.coupling_iterations_max, w.iterations);
     ++summary_.coupling_windows;
-    if (w.converged) return;
+    if (w.converged) return {};
     ++summary_.n_unconverged;
     const ImplicitCouplingParameters& ic = spec_.coupling.implicit;
     const std::string what = fmt::format(
@@ -369,12 +373,13 @@ class RunLoop {
         "(residual {:.3g}, tolerance {:.3g})",
         step_ + 1, t_, ic.max_iterations, w.residual, ic.tolerance);
     if (ic.on_max_iterations == NonConvergence::stop)
-      throw RunFailure(what + "; coupling.implicit.on_max_iterations = stop (raise max_iterations, loosen the tolerance, "
-                              "or choose another acceleration)");
+      return what + "; coupling.implicit.on_max_iterations = stop (raise max_iterations, loosen the tolerance, or "
+                    "choose another acceleration)";
     if (!unconverged_said_ && log_)
       fmt::print("{}{}; the run goes on with the last iterate (said once; the summary counts such steps)\n",
                  tty_ ? "\n" : "", what);
     unconverged_said_ = true;
+    return {};
   }
 
   /// Non-finite state, runaway speed, solid particles leaving the domain: the first offender is named.

@@ -2,11 +2,13 @@
 // elastic plate clamped to the floor, which bends under it from the first step. The implicit scheme with one
 // iteration is the explicit scheme bit for bit; a window repeated from its saved start with the same input
 // gives the same state bit for bit (the save / restore holds everything a step changes); with IQN-ILS the
-// windows converge. Runs on 1 and 2 ranks (ctest coupling_scheme_np1, _np2).
+// windows converge; the run loop counts steps that do not converge, or stops. Runs on 1 to 4 ranks (ctest
+// coupling_scheme_np1..4).
 #include "core/distribution.hpp"
 #include "coupling/acceleration.hpp"
 #include "coupling/coupling_scheme.hpp"
 #include "coupling/fsi_interface.hpp"
+#include "coupling/simulation.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -15,6 +17,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -164,4 +167,42 @@ TEST(CouplingScheme, ImplicitWindowsConvergeWithIqnIls) {
   }
   EXPECT_GT(most, 1);  // the plate moves: one iteration is not enough
   EXPECT_LE(most, 10);
+}
+
+TEST(CouplingScheme, RunLoopCountsOrStopsOnStepsThatDoNotConverge) {
+  // Through the run loop: 20 steps whose tolerance no iteration meets. on_max_iterations continue: the run
+  // ends and its summary counts them; stop: the first such step stops the run with a diagnosis (exit 3).
+  const auto dir = std::filesystem::temp_directory_path() / "mpsfsi_test_coupling_scheme";
+  RunSettings settings;
+  settings.output_dir = dir.string();
+  settings.quiet = true;
+  settings.max_steps = 20;
+  const std::vector<std::string> strict = {"coupling.scheme=implicit", "coupling.implicit.tolerance=1e-15",
+                                           "coupling.implicit.max_iterations=2", "output.interval=1"};
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank == 0) std::filesystem::remove_all(dir);
+  MPI_Barrier(MPI_COMM_WORLD);
+  const CaseSpec going_on = parse_case(plate_case, "plate_in_water", strict);
+  const RunSummary s = run_case(going_on, build_scene(going_on), settings, MPI_COMM_WORLD);
+  EXPECT_EQ(s.n_steps, 20u);
+  EXPECT_EQ(s.coupling_windows, 20u);
+  EXPECT_EQ(s.coupling_iterations, 40u);
+  EXPECT_EQ(s.coupling_iterations_max, 2);
+  EXPECT_GE(s.n_unconverged, 19u);  // (the first step, the solid at rest, may meet it)
+  if (rank == 0) std::filesystem::remove_all(dir);
+  MPI_Barrier(MPI_COMM_WORLD);
+  std::vector<std::string> stopping = strict;
+  stopping.push_back("coupling.implicit.on_max_iterations=stop");
+  const CaseSpec stop = parse_case(plate_case, "plate_in_water", stopping);
+  try {
+    run_case(stop, build_scene(stop), settings, MPI_COMM_WORLD);
+    ADD_FAILURE() << "the run did not stop";
+  } catch (const RunFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("the implicit coupling did not converge in coupling.implicit.max_iterations = 2"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("on_max_iterations = stop"), std::string::npos) << e.what();
+  }
+  if (rank == 0) std::filesystem::remove_all(dir);
 }
