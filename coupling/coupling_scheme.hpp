@@ -3,12 +3,13 @@
 // solid's sub-steps.
 //   explicit  once: the fluid sees the solid at its mid-step prediction (x + u dt / 2, u the solid's mean
 //             velocity of the last step), the solid takes the load of that fluid step.
-//   implicit  fixed-point iterations on the solid's displacement d over the step: the fluid sees the solid at
-//             x + d_k / 2 with velocity d_k / dt, the solid takes that fluid step's load and answers with its
+//   implicit  fixed-point iterations on the solid's displacement d over the step: the fluid sees the solid
+//             where it is at the step's end, x + d_k, with velocity d_k / dt (the pressure solve constrains the
+//             fluid's density at the step's end), the solid takes that fluid step's load and answers with its
 //             displacement H(d_k); the step is repeated from its saved start (save / restore of the particle
 //             arrays and of the solvers' iteration state) with d_{k+1} from the acceleration
-//             (coupling/acceleration.hpp) until |H(d_k) - d_k| <= tolerance |H(d_k)|. The first iterate is
-//             the explicit scheme's prediction, so one iteration is the explicit scheme.
+//             (coupling/acceleration.hpp) until |H(d_k) - d_k| <= tolerance |H(d_k)|. The first iterate is the
+//             displacement at the solid's mean velocity of the last step.
 // docs/architecture.md explains one coupled time step.
 #pragma once
 

@@ -142,7 +142,7 @@ void FsiInterface::prepare_fluid_boundary(const Real dt, const Eigen::VectorXd& 
                                        "particles", displacement.size(), n_solid));
   const SolidView at_mid_step = [&](const std::size_t k, std::size_t) {
     const Vec d = displacement.segment<dim>(static_cast<Eigen::Index>(dim * k));
-    return std::pair<Vec, Vec>(0.5 * d, d / dt);
+    return std::pair<Vec, Vec>(d, d / dt);
   };
   view_solid(&at_mid_step);
 }

@@ -112,9 +112,11 @@ class FsiInterface {
   /// freeze_solid_density, writes the density offset of the solid particles. With midstep_predictor the
   /// fluid sees the solid at x + u dt / 2 with velocity u, u its mean velocity over the last step.
   void prepare_fluid_boundary(Real dt = 0);
-  /// (a) for an iteration of an implicit coupling: the fluid sees the solid at x + d / 2 with velocity d / dt,
-  /// d the solid's displacement over the coming step (this rank's owned solid particles, dim values each, in
-  /// the order of solid_ids()). restore_solid() puts the solid's own state back after the fluid step.
+  /// (a) for an iteration of an implicit coupling: the fluid sees the solid where it is at the step's end,
+  /// x + d, with velocity d / dt, d the solid's displacement over the coming step (this rank's owned solid
+  /// particles, dim values each, in the order of solid_ids()): the pressure solve constrains the fluid's density
+  /// at the step's end, so the boundary it sees must be there too. restore_solid() puts the solid's own state
+  /// back after the fluid step.
   void prepare_fluid_boundary(Real dt, const Eigen::VectorXd& displacement);
   /// The global ids of this rank's owned solid particles, in local order: the entries of the interface data.
   std::vector<GlobalId> solid_ids() const;
