@@ -216,15 +216,14 @@ void IqnIlsAcceleration::end_window() {
 void IqnIlsAcceleration::save_state(BinaryWriter& out) const {
   if (iteration_ != 0) throw std::logic_error("IQN-ILS: save_state within a window");
   Acceleration::save_state(out);
-  MPI_Comm comm = comm_;
   std::vector<std::int64_t> mine(ids_.begin(), ids_.end());
-  out.array(all_gather(comm, mine));
+  out.array(all_gather(comm_, mine));
   out.u64(past_.size());
   for (const Window& win : past_) {
     out.u64(win.v.size());
     for (const auto* columns : {&win.v, &win.w})
       for (const DataVector& col : *columns)
-        out.array(all_gather(comm, std::vector<double>(col.data(), col.data() + col.size())));
+        out.array(all_gather(comm_, std::vector<double>(col.data(), col.data() + col.size())));
   }
   out.i64(dropped_by_ids_);
 }
