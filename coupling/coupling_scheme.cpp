@@ -7,6 +7,7 @@
 #include "coupling/fsi_interface.hpp"
 #include "solid/solid_solver.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -81,15 +82,15 @@ class ImplicitScheme : public CouplingScheme {
     // An RMS displacement of 1e-6 dp per solid particle over the step counts as none (a solid at rest).
     unsigned long long n_ids = ids.size();
     MPI_Allreduce(MPI_IN_PLACE, &n_ids, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, c_.distribution.comm());
-    const Real floor = 1e-6 * c_.dp * std::sqrt(static_cast<Real>(n_ids));
+    n_ids_ = static_cast<Real>(n_ids);
+    const Real floor = 1e-6 * c_.dp * std::sqrt(n_ids_);
     DataVector d = c_.interface.predicted_displacement(dt);
     w.t_coupling += seconds_since(t0);
     for (int k = 0;; ++k) {
-      if (k > 0) {
-        t0 = Clock::now();
-        restore();
-        w.t_coupling += seconds_since(t0);
-      }
+      t0 = Clock::now();
+      if (k > 0) restore();
+      c_.fluid.set_density_tolerance_cap(fluid_density_tolerance(d, floor));
+      w.t_coupling += seconds_since(t0);
       coupled_step(c_, t, dt, n_sub, &d, w);
       t0 = Clock::now();
       const DataVector hd = c_.interface.step_displacement(ids);
@@ -117,6 +118,20 @@ class ImplicitScheme : public CouplingScheme {
   }
 
  private:
+  /// The density error the fluid's pressure solve may leave in an iteration on the displacement d: a share
+  /// kFluidShare of the coupling's tolerance, in the units of the density error. A residual r of the pressure
+  /// equation moves the particles by about (r dt^2 / rho) dp (a density error of e n0 is a compression of e dp),
+  /// so the solve stops at kFluidShare tolerance rms(d) / dp, rms(d) the RMS of d per solid particle (not
+  /// below the floor that counts as a solid at rest). A solve stopped at the coupling's own tolerance would make
+  /// H(d) noisy at the level the iteration must resolve, and light structures (added mass much larger than the
+  /// solid's) amplify that noise beyond it.
+  Real fluid_density_tolerance(const DataVector& d, const Real floor) const {
+    static constexpr Real kFluidShare = 0.1;
+    const Real norm = std::max(std::sqrt(global_dot(d, d, c_.distribution.comm())), floor);
+    const Real rms = norm / std::sqrt(std::max<Real>(1, n_ids_));
+    return kFluidShare * parameters_.tolerance * rms / c_.dp;
+  }
+
   /// The state at the start of the window: this rank's particles (owned and ghosts, every array) with the ghost
   /// plan, the solvers' iteration state and the interface's totals.
   void save() {
@@ -146,6 +161,7 @@ class ImplicitScheme : public CouplingScheme {
   std::string saved_interface_;
   FluidSolver::IterationState saved_fluid_;
   SolidSolver::IterationState saved_solid_;
+  Real n_ids_ = 0;  ///< solid particles on all ranks in the current window
 };
 
 }  // namespace

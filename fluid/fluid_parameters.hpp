@@ -147,6 +147,7 @@ struct FluidParameters {
 struct FluidSetup {
   Real dp = 0;                          ///< particle spacing l0 [m]
   Vec gravity = Vec::Zero();
+  Real gravity_ramp = 0;                ///< [s]: gravity times ramp_factor(t, gravity_ramp) (core/ramp.hpp)
   Rect domain;                          ///< fluid particles leaving it are removed
   TimeSpec time;
   std::vector<FluidMaterial> materials; ///< indexed by ParticleSet::material of the fluid particles

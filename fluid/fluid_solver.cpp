@@ -18,6 +18,7 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
+#include "core/ramp.hpp"
 #include "fluid/pressure_solver.hpp"
 
 #include <Eigen/LU>
@@ -89,7 +90,9 @@ struct FluidSolver::Impl {
     const KernelSums sums = lattice_sums(kernel, dp, re_p);
     n0_kernel = sums.n0;
     c_lattice = sums.c;
-    gravity = setup.gravity;
+    gravity_full = setup.gravity;
+    gravity_ramp = setup.gravity_ramp;
+    gravity = gravity_full * ramp_factor(0, gravity_ramp);
     time = setup.time;
     // One fluid material: the PPE is written for one density.
     int materials[2] = {-1, -1};  // the largest and (negated) the smallest fluid material over the ranks
@@ -359,7 +362,8 @@ struct FluidSolver::Impl {
     // ||r||_2 <= eta rho / dt^2 sqrt(n_rows): RMS over the rows of r dt^2 / rho below eta.
     unsigned long long n_rows_global = n_rows;
     MPI_Allreduce(MPI_IN_PLACE, &n_rows_global, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
-    sys.absolute_tolerance = density_tolerance * rho / (dt * dt) * std::sqrt(static_cast<Real>(n_rows_global));
+    const Real eta = std::min(density_tolerance, density_tolerance_cap);
+    sys.absolute_tolerance = eta * rho / (dt * dt) * std::sqrt(static_cast<Real>(n_rows_global));
     sys.row_ptr.resize(n_rows + 1);
     sys.rhs.resize(n_rows);
     if (projection) {
@@ -866,7 +870,9 @@ struct FluidSolver::Impl {
   Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
   Real projection_scale = 0;      ///< d / C of the projection (projection_geometry)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
-  Vec gravity = Vec::Zero();
+  Vec gravity = Vec::Zero();       ///< of the current step: gravity_full times the ramp at its middle
+  Vec gravity_full = Vec::Zero();  ///< the case's gravity
+  Real gravity_ramp = 0;           ///< [s] (core/ramp.hpp)
   TimeSpec time;
   Rect domain;
   Real rho = 1000, nu = 0, c = 20, kappa = 1;
@@ -875,6 +881,7 @@ struct FluidSolver::Impl {
   Real tolerance = 1e-8;
   Real coarse_cell = 0;  ///< side of the pressure solve's coarse groups (0: none)
   Real density_tolerance = 0;  ///< fluid.density_tolerance: absolute stop, RMS of r dt^2 / rho
+  Real density_tolerance_cap = std::numeric_limits<Real>::infinity();  ///< set_density_tolerance_cap
   std::string preconditioner;
   std::unique_ptr<PressureSolver> solver;
   std::size_t n_steps = 0;
@@ -1006,6 +1013,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_halo += seconds_since(t0);
   t0 = Clock::now();
   m.classify();
+  m.gravity = m.gravity_full * ramp_factor(t + 0.5 * dt, m.gravity_ramp);
   m.move_walls(t + dt);
   report.t_rest += seconds_since(t0);
 
@@ -1126,6 +1134,11 @@ bool FluidSolver::load_state(BinaryReader& in) {
 FluidSolver::IterationState FluidSolver::iteration_state() const { return {impl_->n_steps}; }
 
 void FluidSolver::restore(const IterationState& state) { impl_->n_steps = state.n_steps; }
+
+void FluidSolver::set_density_tolerance_cap(const Real cap) {
+  if (!(cap > 0)) throw std::invalid_argument("FluidSolver::set_density_tolerance_cap: a cap > 0 expected");
+  impl_->density_tolerance_cap = cap;
+}
 
 std::size_t FluidSolver::memory_bytes() const {
   const Impl& m = *impl_;

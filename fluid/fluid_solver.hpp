@@ -121,6 +121,12 @@ class FluidSolver {
   IterationState iteration_state() const;
   void restore(const IterationState& state);
 
+  /// The largest density error (RMS over the rows of r dt^2 / rho, as a fraction of n0) that the coming
+  /// pressure solves may leave, below fluid.density_tolerance when that is tighter; +infinity: none. A
+  /// coupling that iterates a step sets it, so that the fluid's answer is exact to well below the coupling's
+  /// tolerance. With fluid.density_tolerance 0 (relative tolerance only) it changes nothing.
+  void set_density_tolerance_cap(Real cap);
+
   /// Diagnostics and tests: this rank's rows of the last pressure system, the particle (local index at
   /// the time of the solve) of each row, and the lattice constants used (density/gradient, Laplacian).
   const LocalRows& last_system() const;

@@ -103,6 +103,7 @@ struct CaseSpec {
   Real dp = 0;                  ///< particle spacing l0 [m]
   TimeSpec time;
   Vec gravity = Vec::Zero();
+  Real gravity_ramp = 0;  ///< [s]; gravity rises from 0 over this time (core/ramp.hpp); 0: at once
   std::vector<FluidMaterial> fluid_materials;
   std::vector<SolidMaterial> solid_materials;
   std::vector<BodySpec> bodies;

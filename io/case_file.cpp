@@ -1352,6 +1352,8 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
   spec.gravity = top.vec("gravity", Vec::Zero(), "a vector " + components("g") + " in m/s2");
   if (!(spec.gravity.norm() <= max_gravity))
     src.expected(top.at("gravity"), fmt::format("a vector {} in m/s2 of magnitude at most {:g} m/s2 (1000 g)", components("g"), max_gravity));
+  spec.gravity_ramp = top.number("gravity_ramp", 0.0, non_negative,
+                                 "a non-negative time [s] over which gravity rises from 0 (0: at once)");
   read_materials(top.map("materials", "a map of materials, e.g. water: {type: fluid, rho: 1000, nu: 1.0e-6}"), spec);
 
   std::map<std::string, std::string> body_and_wall_names;

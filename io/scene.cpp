@@ -77,15 +77,13 @@ bool taken_by_clamp(const ParticleSet& p, const std::vector<LocalIndex>& clamped
   return false;
 }
 
-void add_wall(const CaseSpec& spec, const WallSpec& w, Scene& scene) {
+/// `clamped`: the clamped particles of the bodies (added before the walls).
+void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIndex>& clamped, Scene& scene) {
   auto& p = scene.particles;
   const int body_index = static_cast<int>(p.bodies.size());
   p.bodies.push_back({w.name, ParticleKind::wall, -1});
   const auto all_points = w.type == WallType::box ? box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top)
                                                   : block_walls(w.rect.lo, w.rect.hi, spec.dp);
-  std::vector<LocalIndex> clamped;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (p.clamped[i]) clamped.push_back(static_cast<LocalIndex>(i));
   std::vector<WallPoint> points;
   for (const auto& pt : all_points)
     if (clamped.empty() || !taken_by_clamp(p, clamped, pt.x, spec.dp)) points.push_back(pt);
@@ -125,7 +123,7 @@ void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
       auto it = std::lower_bound(cells.begin(), cells.end(), q, [&](const auto& e, const IVec& key) { return less(e.first, key); });
       for (; it != cells.end() && it->first == q; ++it) {
         const std::size_t j = it->second;
-        if (p.body[i] != p.body[j] && in_support((p.position[j] - p.position[i]).squaredNorm(), h)) j_min = std::min(j_min, j);
+        if (p.body[i] != p.body[j] && (p.position[j] - p.position[i]).squaredNorm() < h * h * (1.0 - support_margin)) j_min = std::min(j_min, j);
       }
     }
     if (j_min == p.size()) continue;
@@ -144,7 +142,10 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
   check_scene_size(spec, available_memory);
   Scene scene;
   for (const auto& b : spec.bodies) add_body(spec, b, scene);
-  for (const auto& w : spec.walls) add_wall(spec, w, scene);
+  std::vector<LocalIndex> clamped;
+  for (std::size_t i = 0; i < scene.particles.size(); ++i)
+    if (scene.particles.clamped[i]) clamped.push_back(static_cast<LocalIndex>(i));
+  for (const auto& w : spec.walls) add_wall(spec, w, clamped, scene);
   check_overlap(spec, scene.particles);
   return scene;
 }

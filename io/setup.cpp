@@ -8,6 +8,7 @@ FluidSetup fluid_setup(const CaseSpec& spec) {
   FluidSetup s;
   s.dp = spec.dp;
   s.gravity = spec.gravity;
+  s.gravity_ramp = spec.gravity_ramp;
   s.domain = spec.domain;
   s.time = spec.time;
   s.materials = spec.fluid_materials;
@@ -21,6 +22,7 @@ SolidSetup solid_setup(const CaseSpec& spec) {
   s.origin = spec.file;
   s.dp = spec.dp;
   s.gravity = spec.gravity;
+  s.gravity_ramp = spec.gravity_ramp;
   s.materials = spec.solid_materials;
   s.parameters = spec.solid;
   s.tank_motion = spec.tank_motion;

@@ -131,6 +131,7 @@ struct SolidSetup {
   std::string origin;                   ///< names the input in messages (the case file)
   Real dp = 0;                          ///< particle spacing l0 [m]
   Vec gravity = Vec::Zero();
+  Real gravity_ramp = 0;                ///< [s]: gravity times ramp_factor(t, gravity_ramp) (core/ramp.hpp)
   std::vector<SolidMaterial> materials; ///< indexed by ParticleSet::material of the solid particles
   SolidParameters parameters;
   TankMotionSpec tank_motion;           ///< moves the clamped particles

@@ -44,6 +44,7 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
+#include "core/ramp.hpp"
 #include "core/rotation.hpp"
 #include "core/text.hpp"
 #include "solid/sources.hpp"
@@ -150,6 +151,7 @@ struct SolidSolver::Impl {
   Real damping_time = 0;  ///< Kelvin-Voigt retardation time eta of the bonds [s] (0: none)
   bool plane_stress = false, corrected = false, breakable = false;
   Vec gravity = Vec::Zero();
+  Real gravity_ramp = 0;  ///< [s]: gravity times ramp_factor(t, gravity_ramp) (core/ramp.hpp)
   TankMotion tank;
   std::vector<MaterialConstants> mat;
   std::size_t n_broken = 0;  ///< bonds broken so far (all ranks)
@@ -320,6 +322,7 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
   plane_stress = solid.plane_stress;
   corrected = solid.volumetric_strain == VolumetricStrain::corrected;
   gravity = setup.gravity;
+  gravity_ramp = setup.gravity_ramp;
   tank = make_tank_motion(setup.tank_motion);
 
   // Lattice offsets within re, in lexicographic order: the bit slots of the broken-bond flags.
@@ -820,10 +823,11 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
     if (new_surface[k]) (*f_surface)[static_cast<std::size_t>(local[k])] = 1;
 
   // External loads: gravity, the coupling's per-particle force, pressure pulses, seismic sources.
-  const bool has_gravity = gravity.squaredNorm() > 0;
+  const Vec g = gravity * ramp_factor(t, gravity_ramp);
+  const bool has_gravity = g.squaredNorm() > 0;
   for (std::size_t k = 0; k < ns; ++k) {
     const auto i = static_cast<std::size_t>(local[k]);
-    if (has_gravity) force[k] += material_of(i).mass * gravity;
+    if (has_gravity) force[k] += material_of(i).mass * g;
     force[k] += (*f_load)[i];
   }
   for (const auto& load : loads) {

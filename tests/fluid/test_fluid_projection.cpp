@@ -240,3 +240,28 @@ TEST(Projection, RejectsTheCorrectedGradient) {
                          {"fluid.scheme=projection", "fluid.gradient=corrected"}),
                CaseError);
 }
+
+// set_density_tolerance_cap: a cap below fluid.density_tolerance tightens the pressure solve (more iterations,
+// a smaller residual) and a cap above it changes nothing (the same iterations and residual, bit for bit).
+TEST(Projection, DensityToleranceCapTightensTheSolve) {
+  const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/hydrostatic.yaml",
+                                  {"dp=0.01", "fluid.density_tolerance=1e-3", "fluid.tolerance=1e-12"});
+  auto step3 = [&](const Real cap) {
+    Scene scene = build_scene(spec);
+    Distribution dist{MPI_COMM_SELF, {}};
+    FluidSolver fluid{fluid_setup(spec), scene.particles, dist};
+    if (cap > 0) fluid.set_density_tolerance_cap(cap);
+    FluidStepReport r;
+    for (int step = 0; step < 3; ++step) r = fluid.advance(step * 1e-3, 1e-3);
+    return r;
+  };
+  const FluidStepReport plain = step3(0), loose = step3(1e-2), tight = step3(1e-9);
+  EXPECT_EQ(loose.iterations, plain.iterations);
+  EXPECT_EQ(loose.residual, plain.residual);
+  EXPECT_GT(tight.iterations, plain.iterations);
+  EXPECT_LT(tight.residual, 1e-2 * plain.residual);
+  Scene scene = build_scene(spec);
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), scene.particles, dist};
+  EXPECT_THROW(fluid.set_density_tolerance_cap(0), std::invalid_argument);
+}

@@ -2,6 +2,7 @@
 // momentum, angular momentum and energy for a free body; the P-wave speed of the model; clamping;
 // brittle fracture and fragments (eq. 47-48); contact between bodies and fragments (seed 004 §4.4); the
 // Kelvin-Voigt bond damping of coupled runs keeps the first bending mode and damps particle-scale noise.
+#include "core/ramp.hpp"
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
 #include "support/solid_runs.hpp"
@@ -347,6 +348,30 @@ TEST(Solid, WidePlateScalesTheModulusByOneOverOneMinusNuSquared) {
   EXPECT_GT(v_max, 1e-6);
   EXPECT_LT(err, 1e-12 * v_max / (1 - nu * nu) + 1e-300);
   EXPECT_NEAR(dt_wide / dt_plain, std::sqrt(1 - nu * nu), 1e-12);
+}
+
+// gravity_ramp (core/ramp.hpp): a free body falls with the ramped gravity, each step's force taken at the
+// step's start: v_N = g dt sum_k ramp(k dt), with no internal force (a uniform acceleration strains nothing).
+TEST(Solid, GravityRampScalesTheFallExactly) {
+  CaseSpec spec = base_case(0.01);
+  spec.gravity = Vec(0, -9.81);
+  spec.gravity_ramp = 0.01;
+  spec.solid_materials.push_back(material("rubber", 1000, 1e6, 0.3));
+  spec.bodies.push_back(solid_body("block", "rubber", Vec(0, 0), Vec(0.05, 0.05)));
+  Scene scene = build_scene(spec);
+  SolidSolver solid(solid_setup(spec), scene.particles);
+  const Real dt = solid.stable_dt();
+  Real sum = 0;
+  for (int k = 0; k * dt < 1.5 * spec.gravity_ramp; ++k) {
+    solid.advance(k * dt, dt);
+    sum += ramp_factor(k * dt, spec.gravity_ramp);
+    if (k == 0) {
+      EXPECT_EQ(scene.particles.velocity[0][1], 0.0);  // the ramp starts at 0
+    }
+  }
+  for (const Vec& v : scene.particles.velocity) EXPECT_NEAR(v[1], -9.81 * dt * sum, 1e-12);
+  EXPECT_GT(sum * dt, 0.4 * spec.gravity_ramp);
+  EXPECT_LT(sum * dt, 1.1 * spec.gravity_ramp);
 }
 
 }  // namespace
