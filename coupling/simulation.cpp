@@ -16,6 +16,7 @@
 #include "coupling/checkpoint.hpp"
 #include "coupling/coupling_scheme.hpp"
 #include "coupling/fsi_interface.hpp"
+#include "coupling/time_step_policy.hpp"
 #include "coupling/rank0.hpp"
 
 #include "fluid/fluid_solver.hpp"
@@ -94,6 +95,7 @@ class RunLoop {
  public:
   RunLoop(const CaseSpec& spec, Scene& scene, const RunSettings& settings, MPI_Comm comm)
       : spec_(spec), p_(scene.particles), settings_(settings), limits_(spec), comm_(comm),
+        step_policy_({spec.time.end, spec.solid.dt, spec.coupling.subcycles}, comm),
         writer_(settings.output_dir, "particles", rank_of(comm), size_of(comm)),
         probes_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/probes.csv" : std::string(),
                 appends("probes.csv")),
@@ -257,42 +259,20 @@ class RunLoop {
   }
 
   void step() {
-    std::string limit = "fixed";
-    Real dt = 0;
-    if (fluid_) {
-      dt = fluid_->stable_dt(&limit);
-    } else if (solid_) {
-      dt = spec_.solid.dt ? *spec_.solid.dt : solid_->stable_dt();
-      limit = spec_.solid.dt ? "fixed" : "solid stability";
-    }
-    if (spec_.time.end - t_ < dt) {
-      dt = spec_.time.end - t_;
-      limit = "end time";
-    }
+    const StepPlan plan = step_policy_.plan(t_, fluid_.get(), solid_.get());
+    Real dt = plan.dt;
+    const int n_sub = plan.n_sub;
+    const std::string& limit = plan.limit;
     step_limit_ = limit;
-    int n_sub = 1;
-    if (fluid_ && solid_) {
-      // The solid's limit: stable_dt() = solid.dt_factor dp / c_p (dt_factor 0.2 by default; measured
-      // stable up to 0.6, docs/validation.md). A requested N that would exceed it is raised, said once.
-      const Real dt_solid = solid_->stable_dt();
-      const SubcycleChoice choice = choose_subcycles(spec_.coupling.subcycles, dt, dt_solid);
-      n_sub = choice.n;
-      if (choice.raised) {
-        ++summary_.n_subcycles_raised;
-        if (!raised_said_ && log_)
-          fmt::print("{}step {}: subcycles {} would give a solid dt of {:.3e} s > the solid's stable dt {:.3e} s "
-                     "(solid.dt_factor dp / c_p); raised to {} (and whenever needed from now on, counted in the "
-                     "summary)\n",
-                     tty_ ? "\n" : "", step_ + 1, spec_.coupling.subcycles, dt / spec_.coupling.subcycles, dt_solid,
-                     n_sub);
-        raised_said_ = true;
-      }
-    }
-    if (n_ranks_ > 1) {  // rank 0 decides the step for all (and alone logs its limit)
-      Real step[2] = {dt, static_cast<Real>(n_sub)};
-      MPI_Bcast(step, 2, MPI_DOUBLE, 0, comm_);
-      dt = step[0];
-      n_sub = static_cast<int>(step[1]);
+    if (plan.subcycles_raised) {
+      ++summary_.n_subcycles_raised;
+      if (!raised_said_ && log_)
+        fmt::print("{}step {}: subcycles {} would give a solid dt of {:.3e} s > the solid's stable dt {:.3e} s "
+                   "(solid.dt_factor dp / c_p); raised to {} (and whenever needed from now on, counted in the "
+                   "summary)\n",
+                   tty_ ? "\n" : "", step_ + 1, spec_.coupling.subcycles, dt / spec_.coupling.subcycles,
+                   plan.solid_stable_dt, n_sub);
+      raised_said_ = true;
     }
     ++summary_.steps_by_limit[limit];
     if (limit != "end time" && (summary_.dt_min == 0 || dt < summary_.dt_min)) {
@@ -857,6 +837,7 @@ class RunLoop {
   const SpeedLimits limits_;
   MPI_Comm comm_;
   std::vector<std::size_t> initial_fluid_;  ///< fluid particles per body at the start of the case
+  TimeStepPolicy step_policy_;
   std::string step_limit_ = "-";            ///< the dt limit of the step being taken
   std::size_t logged_step_ = static_cast<std::size_t>(-1);  ///< the last step written to run.jsonl
   std::string log_error_;                   ///< rank 0: run.jsonl could not be written (reported at the next output)

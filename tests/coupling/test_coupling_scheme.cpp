@@ -8,6 +8,7 @@
 #include "coupling/coupling_scheme.hpp"
 #include "coupling/fsi_interface.hpp"
 #include "coupling/simulation.hpp"
+#include "coupling/time_step_policy.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -204,4 +205,42 @@ TEST(CouplingScheme, RunLoopCountsOrStopsOnStepsThatDoNotConverge) {
     EXPECT_NE(std::string(e.what()).find("on_max_iterations = stop"), std::string::npos) << e.what();
   }
   if (rank == 0) std::filesystem::remove_all(dir);
+}
+
+// The run loop's time-step policy (coupling/time_step_policy.hpp) on the same participants: the fluid's stable dt
+// and limit, clipped to the end time; the sub-cycles that keep the solid below its stable dt (auto), a requested
+// count raised when it would exceed it; without fluid the solid's stable dt or the case's fixed one. The same
+// plan on every rank.
+TEST(TimeStepPolicy, FluidDtEndTimeAndSubcycles) {
+  Coupled c({"coupling.scheme=explicit"});
+  c.run(2);
+  std::string limit;
+  const Real dt_fluid = c.fluid->stable_dt(&limit), dt_solid = c.solid->stable_dt();
+  ASSERT_GT(dt_fluid, 2 * dt_solid);
+  const TimeStepPolicy automatic({1.0, std::nullopt, 0}, MPI_COMM_WORLD);
+  StepPlan s = automatic.plan(c.t, c.fluid.get(), c.solid.get());
+  EXPECT_EQ(s.dt, dt_fluid);
+  EXPECT_EQ(s.limit, limit);
+  EXPECT_EQ(s.n_sub, static_cast<int>(std::ceil(dt_fluid / dt_solid)));
+  EXPECT_FALSE(s.subcycles_raised);
+  EXPECT_EQ(s.solid_stable_dt, dt_solid);
+  s = automatic.plan(1.0 - 0.25 * dt_fluid, c.fluid.get(), c.solid.get());
+  EXPECT_EQ(s.limit, "end time");
+  EXPECT_EQ(s.dt, 1.0 - (1.0 - 0.25 * dt_fluid));  // the time left, exactly
+  const TimeStepPolicy one({1.0, std::nullopt, 1}, MPI_COMM_WORLD);
+  s = one.plan(c.t, c.fluid.get(), c.solid.get());
+  EXPECT_TRUE(s.subcycles_raised);
+  EXPECT_LE(s.dt / s.n_sub, dt_solid);
+  const TimeStepPolicy solid_only({1.0, std::nullopt, 1}, MPI_COMM_WORLD), fixed({1.0, 1e-6, 1}, MPI_COMM_WORLD);
+  s = solid_only.plan(c.t, nullptr, c.solid.get());
+  EXPECT_EQ(s.limit, "solid stability");
+  EXPECT_EQ(s.dt, dt_solid);
+  EXPECT_EQ(s.n_sub, 1);
+  s = fixed.plan(c.t, nullptr, c.solid.get());
+  EXPECT_EQ(s.limit, "fixed");
+  EXPECT_EQ(s.dt, 1e-6);
+  Real mine = automatic.plan(c.t, c.fluid.get(), c.solid.get()).dt, lo = mine, hi = mine;
+  MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  EXPECT_EQ(lo, hi);
 }
