@@ -4,6 +4,7 @@
 #include "core/distribution.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/stopwatch.hpp"
 
 #include <Kokkos_Core.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
@@ -30,8 +31,6 @@ namespace mpsfsi {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 constexpr Real inf = std::numeric_limits<Real>::infinity();
 

@@ -4,6 +4,7 @@
 #include "core/binary_io.hpp"
 #include "core/distribution.hpp"
 #include "core/particles.hpp"
+#include "core/stopwatch.hpp"
 #include "coupling/fsi_interface.hpp"
 #include "solid/solid_solver.hpp"
 
@@ -27,8 +28,6 @@ void CouplingScheme::load_state(BinaryReader& in) {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// One coupled step: (a) the fluid's view of the solid (the mid-step prediction, or x + d / 2 with velocity
 /// d / dt for a given displacement d), the fluid step, the solid's own state back, (b) the load, (c) the solid.

@@ -12,6 +12,7 @@
 #include "core/files.hpp"
 #include "core/interrupt.hpp"
 #include "core/output_lock.hpp"
+#include "core/stopwatch.hpp"
 #include "core/text.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/coupling_scheme.hpp"
@@ -45,8 +46,6 @@ namespace mpsfsi {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 int rank_of(MPI_Comm comm) {
   int rank = 0;

@@ -19,6 +19,7 @@
 #include "core/neighbours.hpp"
 #include "core/operators.hpp"
 #include "core/ramp.hpp"
+#include "core/stopwatch.hpp"
 #include "fluid/pressure_solver.hpp"
 
 #include <Eigen/LU>
@@ -38,8 +39,6 @@ namespace mpsfsi {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// What a particle does in the fluid computation.
 enum class Role : std::uint8_t {

@@ -13,6 +13,7 @@
 #include "core/binary_io.hpp"
 #include "core/buffers.hpp"
 #include "core/collectives.hpp"
+#include "core/stopwatch.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -54,8 +55,6 @@ using Teuchos::rcp;
 
 static_assert(std::is_same<GO, GlobalId>::value, "GlobalId must match Tpetra's GlobalOrdinal");
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(const Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// Kokkos must be up before the first Tpetra object. MPI belongs to main(); Kokkos (Serial only in this
 /// build) is finalized at exit only if we started it, after every solver object is gone.
