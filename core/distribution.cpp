@@ -31,7 +31,6 @@ namespace mpsfsi {
 
 namespace {
 
-
 constexpr Real inf = std::numeric_limits<Real>::infinity();
 
 static_assert(std::is_same<GlobalId, long long>::value, "the Zoltan2 global ordinal below is long long");

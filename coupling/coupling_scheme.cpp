@@ -28,7 +28,6 @@ void CouplingScheme::load_state(BinaryReader& in) {
 
 namespace {
 
-
 /// One coupled step: (a) the fluid's view of the solid (the mid-step prediction, or x + d / 2 with velocity
 /// d / dt for a given displacement d), the fluid step, the solid's own state back, (b) the load, (c) the solid.
 void coupled_step(const CouplingParticipants& c, const Real t, const Real dt, const int n_sub,
@@ -81,14 +80,13 @@ class ImplicitScheme : public CouplingScheme {
     // An RMS displacement of 1e-6 dp per solid particle over the step counts as none (a solid at rest).
     unsigned long long n_ids = ids.size();
     MPI_Allreduce(MPI_IN_PLACE, &n_ids, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, c_.distribution.comm());
-    n_ids_ = static_cast<Real>(n_ids);
-    const Real floor = 1e-6 * c_.dp * std::sqrt(n_ids_);
+    const Real floor = 1e-6 * c_.dp * std::sqrt(static_cast<Real>(n_ids));
     DataVector d = c_.interface.predicted_displacement(dt);
     w.t_coupling += seconds_since(t0);
     for (int k = 0;; ++k) {
       t0 = Clock::now();
       if (k > 0) restore();
-      c_.fluid.set_density_tolerance_cap(fluid_density_tolerance(d, floor));
+      c_.fluid.set_density_tolerance_cap(fluid_density_tolerance(d, floor, n_ids));
       w.t_coupling += seconds_since(t0);
       coupled_step(c_, t, dt, n_sub, &d, w);
       t0 = Clock::now();
@@ -124,10 +122,10 @@ class ImplicitScheme : public CouplingScheme {
   /// below the floor that counts as a solid at rest). A solve stopped at the coupling's own tolerance would make
   /// H(d) noisy at the level the iteration must resolve, and light structures (added mass much larger than the
   /// solid's) amplify that noise beyond it.
-  Real fluid_density_tolerance(const DataVector& d, const Real floor) const {
+  Real fluid_density_tolerance(const DataVector& d, const Real floor, const unsigned long long n_ids) const {
     static constexpr Real kFluidShare = 0.1;
     const Real norm = std::max(std::sqrt(global_dot(d, d, c_.distribution.comm())), floor);
-    const Real rms = norm / std::sqrt(std::max<Real>(1, n_ids_));
+    const Real rms = norm / std::sqrt(std::max<Real>(1, static_cast<Real>(n_ids)));
     return kFluidShare * parameters_.tolerance * rms / c_.dp;
   }
 
@@ -160,7 +158,6 @@ class ImplicitScheme : public CouplingScheme {
   std::string saved_interface_;
   FluidSolver::IterationState saved_fluid_;
   SolidSolver::IterationState saved_solid_;
-  Real n_ids_ = 0;  ///< solid particles on all ranks in the current window
 };
 
 }  // namespace

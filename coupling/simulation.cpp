@@ -46,7 +46,6 @@ namespace mpsfsi {
 
 namespace {
 
-
 int rank_of(MPI_Comm comm) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);

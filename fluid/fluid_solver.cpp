@@ -39,7 +39,6 @@ namespace mpsfsi {
 
 namespace {
 
-
 /// What a particle does in the fluid computation.
 enum class Role : std::uint8_t {
   fluid,     ///< moves with the fluid equations, PPE row

@@ -55,7 +55,6 @@ using Teuchos::rcp;
 
 static_assert(std::is_same<GO, GlobalId>::value, "GlobalId must match Tpetra's GlobalOrdinal");
 
-
 /// Kokkos must be up before the first Tpetra object. MPI belongs to main(); Kokkos (Serial only in this
 /// build) is finalized at exit only if we started it, after every solver object is gone.
 void ensure_kokkos() {

@@ -123,7 +123,9 @@ void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
       auto it = std::lower_bound(cells.begin(), cells.end(), q, [&](const auto& e, const IVec& key) { return less(e.first, key); });
       for (; it != cells.end() && it->first == q; ++it) {
         const std::size_t j = it->second;
-        if (p.body[i] != p.body[j] && (p.position[j] - p.position[i]).squaredNorm() < h * h * (1.0 - support_margin)) j_min = std::min(j_min, j);
+        // r = 0 included (unlike in_support): two walls on the same lattice points overlap too.
+        if (p.body[i] != p.body[j] && (p.position[j] - p.position[i]).squaredNorm() < h * h * (1.0 - support_margin))
+          j_min = std::min(j_min, j);
       }
     }
     if (j_min == p.size()) continue;

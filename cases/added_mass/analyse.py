@@ -21,18 +21,7 @@ import os
 import sys
 
 import yaml
-
-
-def bisect(f, lo, hi, n=200):
-    flo = f(lo)
-    for _ in range(n):
-        mid = 0.5 * (lo + hi)
-        fm = f(mid)
-        if (fm < 0) == (flo < 0):
-            lo, flo = mid, fm
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+from scipy.optimize import brentq
 
 
 def analytic_periods(case):
@@ -46,10 +35,10 @@ def analytic_periods(case):
     rho_s, e, rho_f, c = (float(v) for v in (solid["rho"], solid["E"], fluid["rho"], fluid["c"]))
     cs = math.sqrt(e / rho_s)
     ratio = rho_s * h / (rho_f * length)
-    x = bisect(lambda b: b * math.tan(b) - ratio, 1e-12, math.pi / 2 - 1e-12)
+    x = brentq(lambda b: b * math.tan(b) - ratio, 1e-12, math.pi / 2 - 1e-12, xtol=1e-15)
     t_inc = 2 * math.pi * h / (x * cs)
     w_max = min(math.pi / 2 * cs / h, math.pi / 2 * c / length) * (1 - 1e-12)
-    w = bisect(lambda w: rho_s * cs / math.tan(w * h / cs) - rho_f * c * math.tan(w * length / c), 1e-9, w_max)
+    w = brentq(lambda w: rho_s * cs / math.tan(w * h / cs) - rho_f * c * math.tan(w * length / c), 1e-9, w_max, xtol=1e-13)
     g = abs(float(case.get("gravity", [0, 0])[-1]))
     shortening = g * (rho_f * length * h + rho_s * h * h / 2) / e / h
     return ratio, t_inc, 2 * math.pi / w, shortening
