@@ -13,6 +13,7 @@
 #include "io/case.hpp"
 #include "io/scene.hpp"
 #include "solid/solid_solver.hpp"
+#include "support/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -172,7 +173,7 @@ TEST(CouplingScheme, ImplicitWindowsConvergeWithIqnIls) {
 TEST(CouplingScheme, RunLoopCountsOrStopsOnStepsThatDoNotConverge) {
   // Through the run loop: 20 steps whose tolerance no iteration meets. on_max_iterations continue: the run
   // ends and its summary counts them; stop: the first such step stops the run with a diagnosis (exit 3).
-  const auto dir = std::filesystem::temp_directory_path() / "mpsfsi_test_coupling_scheme";
+  const auto dir = test::fresh_temp_dir("coupling_scheme");
   RunSettings settings;
   settings.output_dir = dir.string();
   settings.quiet = true;
@@ -181,8 +182,6 @@ TEST(CouplingScheme, RunLoopCountsOrStopsOnStepsThatDoNotConverge) {
                                            "coupling.implicit.max_iterations=2", "output.interval=1"};
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  if (rank == 0) std::filesystem::remove_all(dir);
-  MPI_Barrier(MPI_COMM_WORLD);
   const CaseSpec going_on = parse_case(plate_case, "plate_in_water", strict);
   const RunSummary s = run_case(going_on, build_scene(going_on), settings, MPI_COMM_WORLD);
   EXPECT_EQ(s.n_steps, 20u);
