@@ -912,7 +912,7 @@ RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real
   }
   const Real dt_solid = c_p > 0 ? spec.solid.dt_factor * spec.dp / c_p : 0;
   if (n_fluid > 0) {
-    r.dt = fluid_stable_dt(spec.time, spec.dp, nu, spec.gravity.norm(), v_max, 0, FluidOptions{}.viscous_number, &r.limit);
+    r.dt = fluid_stable_dt(spec.time, spec.dp, nu, spec.gravity.norm(), v_max, FluidOptions{}.viscous_number, &r.limit);
     if (n_solid > 0) r.subcycles = choose_subcycles(spec.coupling.subcycles, r.dt, dt_solid).n;
   } else if (n_solid > 0) {
     r.dt = spec.solid.dt ? *spec.solid.dt : dt_solid;

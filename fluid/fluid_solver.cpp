@@ -725,20 +725,25 @@ struct FluidSolver::Impl {
     }
   }
 
-  /// The projection's correction: v_k += -(dt/rho)(d/C) (p_k dn_k/dx_k + sum_j p_j dn_j/dx_k), r_k += dt dv_k,
-  /// for the fluid particles k (the transpose of the rows' operator).
+  /// The projection's correction: v_k += -(dt/rho)(d/C) sum_j (p_k + p_j - 2 b_k) dn_j/dx_k, r_k += dt dv_k, for
+  /// the fluid particles k; the sum runs over the neighbours j that carry a pressure (rows and wall groups; the
+  /// others add p_k dn_j/dx_k). With b_k = 0 it is the transpose of the rows' operator, (d/C)(p_k dn_k/dx_k +
+  /// sum_j p_j dn_j/dx_k); b_k = max(0, p_k - p_cap) caps the pressure the force's stiffness carries
+  /// (stiffness_number in fluid/fluid_solver.hpp).
   void correct_projection(const Real dt) {
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
+    const Real p_cap = stiffness_number * rho * dp * dp / (dt * dt);
     const std::size_t n = p.n_owned();
     dv.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
       dv[k].setZero();
       if (roles[k] != Role::fluid) continue;
       Vec f = pressure[k] * dn_self[k];
+      const Real two_b = 2.0 * std::max(0.0, pressure[k] - p_cap);
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
         const auto j = static_cast<std::size_t>(near.index[q]);
-        if (has_row(roles[j])) f += pressure[j] * dn_pair[q];
-        else if (parent_of[j] >= 0) f += pressure[static_cast<std::size_t>(parent_of[j])] * dn_pair[q];
+        if (has_row(roles[j])) f += (pressure[j] - two_b) * dn_pair[q];
+        else if (parent_of[j] >= 0) f += (pressure[static_cast<std::size_t>(parent_of[j])] - two_b) * dn_pair[q];
       }
       dv[k] = -dt / rho * projection_scale * f;
     }
@@ -950,21 +955,17 @@ FluidSolver::~FluidSolver() = default;
 
 Real FluidSolver::stable_dt(std::string* limit) const {
   const Impl& m = *impl_;
-  if (m.time.dt) return fluid_stable_dt(m.time, m.dp, m.nu, 0, 0, 0, m.opt.viscous_number, limit);
-  Real maxima[2] = {0, 0};  // the largest squared speed, the largest pressure (rows of the projection)
-  const auto& pressure = m.p.scalar_field(fluid_fields::pressure);
-  for (std::size_t i = 0; i < m.p.n_owned(); ++i) {
+  if (m.time.dt) return fluid_stable_dt(m.time, m.dp, m.nu, 0, 0, m.opt.viscous_number, limit);
+  Real v2_max = 0;
+  for (std::size_t i = 0; i < m.p.n_owned(); ++i)
     if (m.p.kind[i] == ParticleKind::fluid || (m.motion.moving() && m.p.kind[i] == ParticleKind::wall))
-      maxima[0] = std::max(maxima[0], m.p.velocity[i].squaredNorm());
-    if (m.projection) maxima[1] = std::max(maxima[1], pressure[i]);
-  }
-  MPI_Allreduce(MPI_IN_PLACE, maxima, 2, MPI_DOUBLE, MPI_MAX, m.comm);
-  return fluid_stable_dt(m.time, m.dp, m.nu, m.gravity.norm(), std::sqrt(maxima[0]), std::sqrt(maxima[1] / m.rho),
-                         m.opt.viscous_number, limit);
+      v2_max = std::max(v2_max, m.p.velocity[i].squaredNorm());
+  MPI_Allreduce(MPI_IN_PLACE, &v2_max, 1, MPI_DOUBLE, MPI_MAX, m.comm);
+  return fluid_stable_dt(m.time, m.dp, m.nu, m.gravity.norm(), std::sqrt(v2_max), m.opt.viscous_number, limit);
 }
 
 Real fluid_stable_dt(const TimeSpec& time, const Real dp, const Real nu, const Real acceleration, const Real v_max,
-                     const Real pressure_speed, const Real viscous_number, std::string* limit) {
+                     const Real viscous_number, std::string* limit) {
   const auto name = [&](const char* s) {
     if (limit) *limit = s;
   };
@@ -983,10 +984,6 @@ Real fluid_stable_dt(const TimeSpec& time, const Real dp, const Real nu, const R
   if (acceleration > 0 && std::sqrt(courant * dp / acceleration) < dt) {
     dt = std::sqrt(courant * dp / acceleration);
     name("acceleration");
-  }
-  if (pressure_speed > 0 && pressure_number * dp / pressure_speed < dt) {
-    dt = pressure_number * dp / pressure_speed;
-    name("pressure");
   }
   if (nu > 0 && viscous_number * dp * dp / nu < dt) {
     dt = viscous_number * dp * dp / nu;

@@ -67,21 +67,23 @@ Real fluid_interaction_radius(const FluidSetup& setup);
 /// particles also the explicit phases (docs/performance.md, ## Parallel runs). Other kinds: 1.
 Real fluid_work_weight(ParticleKind kind);
 
-/// The projection's pressure limit: dt <= pressure_number dp / sqrt(p_max / rho). Its force on particle k,
-/// -(1/rho)(d/C) sum_i p_i dn_i/dx_k, holds the whole pressure, not a difference of pressures, so a particle
-/// displaced by xi from its neighbours feels a restoring acceleration of order p xi / (rho dp^2): a stiffness
-/// that the step integrates explicitly and that is stable only while p dt^2 / (rho dp^2) stays below a bound
-/// (measured in docs/validation.md, "Fluid at every resolution"); 0.3 keeps it at 0.09.
-inline constexpr Real pressure_number = 0.3;
+/// The projection's force on fluid particle k, -(1/rho)(d/C) sum_i p_i dn_i/dx_k = -(1/rho)(d/C) sum_j (p_k + p_j)
+/// dn_j/dx_k, holds the whole pressure, not a difference of pressures: a particle displaced by xi from its
+/// neighbours feels a restoring acceleration of order p xi / (rho dp^2), a stiffness that the step integrates
+/// explicitly and that is stable only while p dt^2 / (rho dp^2) stays below a bound (0.12-0.24, measured in
+/// docs/validation.md, "Fluid at every resolution"). The correction therefore takes p_k + p_j - 2 b_k in place of
+/// p_k + p_j, b_k = max(0, p_k - p_cap), p_cap = stiffness_number rho dp^2 / dt^2: the stiffness carries at most
+/// p_cap. The term taken away, -2 b_k dn_k/dx_k, is zero wherever the neighbours of k lie on a regular
+/// arrangement (a full support, or the walls' lattice), so the force there is unchanged; as dt -> 0 the cap
+/// rises above every pressure and the force is the transpose of the rows' operator.
+inline constexpr Real stiffness_number = 0.09;
 
 /// Largest admissible fluid dt: time.dt when fixed, else the smallest of time.dt_max, the CFL limit of
 /// eq. 52 for the largest speed v_max, the same limit for a particle that starts at rest under the
-/// acceleration |g| (sqrt(C dp / |g|)), the pressure limit pressure_number dp / pressure_speed for
-/// pressure_speed = sqrt(p_max / rho) (0: none; the projection's) and the viscous limit viscous_number dp^2 /
-/// nu. `limit`, if given, receives the name of the active limit ("fixed", "dt_max", "cfl", "acceleration",
-/// "pressure", "viscous").
-Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, Real v_max, Real pressure_speed,
-                     Real viscous_number, std::string* limit = nullptr);
+/// acceleration |g| (sqrt(C dp / |g|)) and the viscous limit viscous_number dp^2 / nu. `limit`, if given,
+/// receives the name of the active limit ("fixed", "dt_max", "cfl", "acceleration", "viscous").
+Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, Real v_max, Real viscous_number,
+                     std::string* limit = nullptr);
 
 class FluidSolver {
  public:
@@ -94,8 +96,7 @@ class FluidSolver {
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;
 
-  /// Largest admissible dt now (fluid_stable_dt for the fluid's largest speed, the gravity and, with the
-  /// projection, the largest pressure of the last step).
+  /// Largest admissible dt now (fluid_stable_dt for the fluid's largest speed and the gravity).
   Real stable_dt(std::string* limit = nullptr) const;
   /// One semi-implicit step (seed 004 eq. 16-24) from time t to t + dt.
   FluidStepReport advance(Real t, Real dt);
