@@ -1,4 +1,4 @@
-// Tests of the semi-implicit fluid in 3D (fluid/fluid_solver.cpp with MPSFSI_DIM=3), in-process: water at
+// Tests of the semi-implicit fluid in 3D (fluid/ with MPSFSI_DIM=3), in-process: water at
 // rest in a box tank with dummy layers stays at rest and takes the hydrostatic pressure (the criteria of the
 // 2D case cases/hydrostatic.yaml: largest speed below 1 % of sqrt(g h), pressure within 2 % of rho g (h - z)
 // deeper than 3 dp, no particle lost) at 20 particles through the depth.

@@ -1,0 +1,297 @@
+// The phases of a fluid step that do not depend on the pressure scheme (fluid/fluid_core.hpp): the roles, the
+// tank's walls, the explicit prediction (seed 004 eq. 12, 16-17), the collision model, the number density n*
+// (eq. 8) and the free-surface double check (§4.3), the numbering of the pressure rows, the removal of the
+// particles that left the domain.
+#include "fluid/fluid_core.hpp"
+
+#include "core/buffers.hpp"
+#include "core/operators.hpp"
+#include "core/ramp.hpp"
+#include "core/stopwatch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace mpsfsi::fluid_detail {
+
+namespace {
+
+/// The coarse group of a particle: the cell of side h that holds x, cut by the ranks' regions (a group that
+/// straddles a cut is one group per owner: the deflation then also removes the error the block-Jacobi
+/// sweeps leave across the cut). One key per group: the owner in the top 20 bits, then 43 / dim bits per
+/// axis (cells counted from -2^(bits-1); cells further out share keys, which only merges groups).
+std::int64_t group_key(const Vec& x, const Real h, const int owner) {
+  constexpr int bits = 43 / dim;
+  constexpr std::int64_t mask = (std::int64_t{1} << bits) - 1;
+  std::int64_t key = static_cast<std::int64_t>(owner) & ((std::int64_t{1} << 20) - 1);
+  for (int a = 0; a < dim; ++a)
+    key = (key << bits) | ((static_cast<std::int64_t>(std::floor(x[a] / h)) + (std::int64_t{1} << (bits - 1))) & mask);
+  return key;
+}
+
+}  // namespace
+
+FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distribution& distribution,
+                     const FluidOptions& options)
+    : p(particles), dist(distribution), opt(options), motion(make_tank_motion(setup.tank_motion)) {
+  const FluidParameters& fluid = setup.parameters;
+  comm = dist.comm();
+  rank = dist.rank();
+  dp = setup.dp;
+  re_g = fluid.re_gradient * dp;
+  re_l = fluid.re_laplacian * dp;
+  r_max = std::max(re_g, re_l);
+  lat_g = lattice_constants(dp, re_g);
+  lat_l = lattice_constants(dp, re_l);
+  beta1 = fluid.beta1;
+  beta2 = fluid.beta2;
+  gravity_full = setup.gravity;
+  gravity_ramp = setup.gravity_ramp;
+  gravity = gravity_full * ramp_factor(0, gravity_ramp);
+  time = setup.time;
+  // One fluid material: the PPE is written for one density.
+  int materials[2] = {-1, -1};  // the largest and (negated) the smallest fluid material over the ranks
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (p.kind[i] == ParticleKind::fluid) {
+      materials[0] = std::max(materials[0], static_cast<int>(p.material[i]));
+      materials[1] = std::max(materials[1], -static_cast<int>(p.material[i]));
+    }
+  MPI_Allreduce(MPI_IN_PLACE, materials, 2, MPI_INT, MPI_MAX, comm);
+  const int material = materials[0];
+  if (material >= 0 && -materials[1] != material)
+    throw std::invalid_argument("the fluid solver supports one fluid material per case");
+  if (material < 0 || material >= static_cast<int>(setup.materials.size()))
+    throw std::invalid_argument("the fluid solver needs fluid particles with a fluid material");
+  const FluidMaterial& m = setup.materials[static_cast<std::size_t>(material)];
+  rho = m.rho;
+  nu = m.nu;
+  c = m.c;
+  kappa = m.kappa;
+  lateral_friction = lateral_wall_friction_rate(fluid.lateral_walls, nu);
+
+  PressureSolverSettings ps;
+  ps.solver = fluid.solver;
+  ps.preconditioner = fluid.preconditioner;
+  ps.tolerance = fluid.tolerance;
+  ps.max_iterations = fluid.max_iterations;
+  ps.rebuild_every = fluid.preconditioner_rebuild_every;
+  solver = make_pressure_solver(ps, comm);
+  tolerance = ps.tolerance;
+  if (fluid.coarse_size != 0 && !(fluid.coarse_size >= fluid.re_laplacian))
+    throw std::invalid_argument("fluid.coarse_size: " + std::to_string(fluid.coarse_size) +
+                                " (expected 0 or at least re_laplacian = " + std::to_string(fluid.re_laplacian) + ")");
+  const bool two_level = ps.preconditioner == Preconditioner::ssor || ps.preconditioner == Preconditioner::sgs;
+  coarse_cell = two_level ? fluid.coarse_size * dp : 0;
+  density_tolerance = fluid.density_tolerance;
+  preconditioner = std::string(to_string(ps.preconditioner));
+
+  p.add_scalar_field(fluid_fields::pressure, 0.0);
+  p.add_scalar_field(fluid_fields::free_surface, 0.0);
+  if (motion.moving() && !p.has_vector_field(wall_reference_field)) {
+    auto& reference = p.add_vector_field(wall_reference_field);
+    for (std::size_t i = 0; i < p.size(); ++i) reference[i] = p.position[i];
+  }
+}
+Role FluidCore::role(const ParticleKind k) const {
+  switch (k) {
+    case ParticleKind::fluid: return Role::fluid;
+    case ParticleKind::wall: return Role::boundary;
+    case ParticleKind::dummy: return Role::dummy;
+    case ParticleKind::solid: return opt.solid_as_boundary ? Role::boundary : Role::none;
+  }
+  return Role::none;
+}
+
+// ---- phases of a step, one loop over a neighbour list each ----
+
+void FluidCore::classify() {
+  const std::size_t n = p.size();
+  roles.resize(n);
+  for (std::size_t i = 0; i < n; ++i) roles[i] = role(p.kind[i]);
+  // Coupled solids: flagged (surface) particles are boundary particles, the others dummies.
+  if (opt.boundary_flag_field.empty() || !p.has_scalar_field(opt.boundary_flag_field)) return;
+  const auto& flag = p.scalar_field(opt.boundary_flag_field);
+  for (std::size_t i = 0; i < n; ++i)
+    if (p.kind[i] == ParticleKind::solid) roles[i] = flag[i] != 0 ? Role::boundary : Role::dummy;
+}
+
+/// Walls and their dummy layers follow the tank motion: rotation about the pivot, v = omega x r.
+void FluidCore::move_walls(const Real t) {
+  if (!motion.moving()) return;
+  const auto [theta, omega] = motion.at(t);
+  wall_omega = omega;
+  const auto& reference = p.vector_field(wall_reference_field);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
+    p.position[i] = motion.place(reference[i], theta);
+    p.velocity[i] = motion.velocity_at(p.position[i], omega);
+  }
+}
+
+/// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles. With lateral-wall
+/// friction k (fluid.lateral_walls), the velocity relative to the tank then decays exactly over the step:
+/// v* = v_wall + (v* - v_wall) exp(-k dt), v_wall the rigid velocity of the tank at the particle.
+void FluidCore::predict(const Real dt) {
+  const std::size_t n = p.n_owned();
+  const Real a = 2.0 * dim / (lat_l.lambda * lat_l.n0);
+  const Real decay = std::exp(-lateral_friction * dt);
+  const bool friction = lateral_friction > 0;
+  const auto takes_part = [&](const std::size_t j) { return roles[j] != Role::none; };
+  // The Laplacian of the velocities at the start of the step, for every particle before any moves.
+  dv.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    dv[i] = roles[i] == Role::fluid && nu > 0 ? laplacian_sum_at(p.position, nl, re_l, i, p.velocity, takes_part)
+                                              : Vec::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (roles[i] != Role::fluid) continue;
+    p.velocity[i] += dt * (nu * a * dv[i] + gravity);
+    if (friction) {
+      const Vec v_wall = motion.moving() ? motion.velocity_at(p.position[i], wall_omega) : Vec::Zero();
+      p.velocity[i] = v_wall + decay * (p.velocity[i] - v_wall);
+    }
+    p.position[i] += dt * p.velocity[i];
+  }
+}
+
+void FluidCore::build_near_list(const Real radius, const std::size_t n) {
+  near.radius = radius;
+  near.support_only = true;
+  near.offset.resize(n + 1);
+  // An upper bound; not trimmed (n_pairs() = offset.back()), so that the next step need not zero-fill it.
+  if (near.index.size() < nl.n_pairs()) resize_with_headroom(near.index, nl.n_pairs());
+  near.offset[0] = 0;
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec xi = p.position[i];
+    if (roles[i] != Role::none)
+      for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
+        const LocalIndex j = nl.index[k];
+        const bool keep = roles[static_cast<std::size_t>(j)] != Role::none &&
+                          in_support((p.position[static_cast<std::size_t>(j)] - xi).squaredNorm(), near.radius);
+        near.index[m] = j;  // branch-free append
+        m += keep;
+      }
+    near.offset[i + 1] = m;
+  }
+}
+
+/// Collision model (MPS-Basic collision()): approaching pairs closer than the collision distance
+/// exchange momentum along their line with restitution e; boundaries have infinite mass.
+void FluidCore::collide(const Real dt) {
+  const Real dc2 = std::pow(opt.collision_distance * dp, 2);
+  const std::size_t n = p.n_owned();
+  v_new.resize(n);
+  for (std::size_t i = 0; i < n; ++i) v_new[i] = p.velocity[i];
+  for (std::size_t i = 0; i < n; ++i) {
+    if (roles[i] != Role::fluid) continue;
+    const Vec xi = p.position[i], vi = p.velocity[i];
+    for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+      const auto j = static_cast<std::size_t>(near.index[k]);
+      const Vec rij = p.position[j] - xi;
+      const Real r2 = rij.squaredNorm();
+      if (r2 >= dc2) continue;
+      const Real r = std::sqrt(r2);
+      const Vec e = rij / r;
+      const Real approach = (vi - p.velocity[j]).dot(e);
+      if (approach <= 0) continue;
+      const Real share = roles[j] == Role::fluid ? 0.5 : 1.0;  // equal masses, or a wall
+      v_new[i] -= (1 + opt.restitution) * share * approach * e;
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (roles[i] != Role::fluid) continue;
+    p.position[i] += dt * (v_new[i] - p.velocity[i]);
+    p.velocity[i] = v_new[i];
+  }
+}
+
+/// Eq. 8 at the predicted positions: n*, the neighbour count N, and the free-surface double check.
+void FluidCore::density_and_surface(const bool keep_surface) {
+  const std::size_t n = p.n_owned();
+  const bool warm_start = keep_surface && n_steps > 0;
+  n_star.resize(n);
+  auto& surface = p.scalar_field(fluid_fields::free_surface);
+  const std::vector<Real>* offset = nullptr;
+  if (!opt.density_offset_field.empty() && p.has_scalar_field(opt.density_offset_field))
+    offset = &p.scalar_field(opt.density_offset_field);
+  for (std::size_t i = 0; i < n; ++i) {
+    // The near list holds exactly the pairs within re_g of particles that take part.
+    const DensityAndCount d = roles[i] != Role::none ? number_density_at(p.position, near, re_g, i) : DensityAndCount{};
+    Real ni = d.n;
+    if (offset && roles[i] == Role::boundary) ni += (*offset)[i];
+    n_star[i] = ni;
+    const bool geometric = has_row(roles[i]) && ni < beta1 * lat_g.n0 && d.count < beta2 * lat_g.n_neighbours;
+    // The projection starts from the last step's active set (update_active_set), and the geometric test adds
+    // the particles that left the water.
+    const bool kept = warm_start && surface[i] != 0;
+    surface[i] = has_row(roles[i]) && (geometric || kept) ? 1.0 : 0.0;
+  }
+}
+
+
+void FluidCore::number_rows(const Real dt) {
+  const std::size_t n = p.size(), n_own = p.n_owned();
+  row_of.resize(n);
+  particle_of_row.clear();
+  sys.row_id.clear();
+  sys.remote_id.clear();
+  sys.remote_rank.clear();
+  for (std::size_t i = 0; i < n_own; ++i) {
+    row_of[i] = has_row(roles[i]) ? static_cast<LocalIndex>(particle_of_row.size()) : -1;
+    if (row_of[i] >= 0) {
+      particle_of_row.push_back(static_cast<LocalIndex>(i));
+      sys.row_id.push_back(p.global_id[i]);
+    }
+  }
+  const std::size_t n_rows = particle_of_row.size();
+  for (std::size_t j = n_own; j < n; ++j) {
+    row_of[j] = has_row(roles[j]) ? static_cast<LocalIndex>(n_rows + sys.remote_id.size()) : -1;
+    if (row_of[j] >= 0) {
+      sys.remote_id.push_back(p.global_id[j]);
+      sys.remote_rank.push_back(dist.ghost_owner(j - n_own));
+    }
+  }
+  sys.group.clear();
+  if (coarse_cell > 0) {  // the coarse groups: cells of side coarse_cell and owner, the same on every rank
+    for (std::size_t r = 0; r < n_rows; ++r)
+      sys.group.push_back(group_key(p.position[static_cast<std::size_t>(particle_of_row[r])], coarse_cell, dist.rank()));
+    for (std::size_t j = n_own; j < n; ++j)
+      if (row_of[j] >= 0) sys.group.push_back(group_key(p.position[j], coarse_cell, dist.ghost_owner(j - n_own)));
+  }
+  // ||r||_2 <= eta rho / dt^2 sqrt(n_rows): RMS over the rows of r dt^2 / rho below eta.
+  unsigned long long n_rows_global = n_rows;
+  MPI_Allreduce(MPI_IN_PLACE, &n_rows_global, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
+  const Real eta = std::min(density_tolerance, density_tolerance_cap);
+  sys.absolute_tolerance = eta * rho / (dt * dt) * std::sqrt(static_cast<Real>(n_rows_global));
+  sys.row_ptr.resize(n_rows + 1);
+  sys.rhs.resize(n_rows);
+}
+
+/// Refreshes these fields at the ghosts from their owners.
+void FluidCore::refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report) {
+  const auto t0 = Clock::now();
+  dist.exchange_ghosts(p, fields);
+  report.t_halo += seconds_since(t0);
+}
+
+/// Fluid particles outside the case's domain are removed (with the ghosts, which are then renewed at the
+/// next step).
+std::size_t FluidCore::remove_escaped() {
+  const std::size_t n = p.n_owned();
+  remove.assign(n, 0);
+  std::size_t n_out = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (p.kind[i] == ParticleKind::fluid && !domain.contains(p.position[i])) {
+      remove[i] = 1;
+      ++n_out;
+    }
+  if (n_out > 0) {
+    p.drop_ghosts();
+    p.remove_if(remove);
+  }
+  return n_out;
+}
+
+
+}  // namespace mpsfsi::fluid_detail

@@ -1,0 +1,129 @@
+// The state one fluid step shares between its phases (fluid/fluid_core.cpp) and its pressure scheme
+// (fluid/pressure_scheme.hpp): the particles and their roles, the neighbour lists, the numbering of the pressure
+// rows and the pressure system, the fluid's material and the step's gravity. Internal to fluid/: FluidSolver
+// (fluid/fluid_solver.cpp) runs a step as a sequence of these phases and of its scheme's.
+#pragma once
+
+#include "core/distribution.hpp"
+#include "core/kernel.hpp"
+#include "core/neighbours.hpp"
+#include "core/particles.hpp"
+#include "core/tank_motion.hpp"
+#include "core/time_spec.hpp"
+#include "fluid/fluid_solver.hpp"
+#include "fluid/pressure_solver.hpp"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mpsfsi::fluid_detail {
+
+/// What a particle does in the fluid computation.
+enum class Role : std::uint8_t {
+  fluid,     ///< moves with the fluid equations, PPE row
+  boundary,  ///< prescribed position and velocity, PPE row (wall particles; solids when coupled)
+  dummy,     ///< counts in the number density only
+  none       ///< ignored (solids when not coupled)
+};
+
+inline bool has_row(const Role r) { return r == Role::fluid || r == Role::boundary; }
+
+/// The phases of a step that do not depend on the pressure scheme, and what they leave for it.
+struct FluidCore {
+  /// The fluid's material, the kernels' radii and lattice constants, the pressure solver; throws
+  /// std::invalid_argument when the particles hold more than one fluid material or none.
+  FluidCore(const FluidSetup& setup, ParticleSet& particles, Distribution& distribution, const FluidOptions& options);
+
+  /// The particle field that holds each wall particle's position in the tank's rest frame (moving tanks).
+  static constexpr const char* wall_reference_field = "wall_reference";
+
+  Role role(ParticleKind k) const;
+  /// roles of every particle (owned and ghosts) for this step.
+  void classify();
+  /// Walls and their dummy layers follow the tank motion: rotation about the pivot, v = omega x r.
+  void move_walls(Real t);
+  /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles (fluid/fluid_core.cpp).
+  void predict(Real dt);
+  /// Pairs within `radius` at the predicted positions, rows of the first n particles (a filtered copy of nl).
+  void build_near_list(Real radius, std::size_t n);
+  /// Collision model (MPS-Basic collision()).
+  void collide(Real dt);
+  /// Eq. 8 at the predicted positions: n*, and the free-surface double check; `keep_surface`: a particle
+  /// flagged in the last step stays flagged (the active set's warm start).
+  void density_and_surface(bool keep_surface);
+  /// The rows of this rank (owned particles with a pressure unknown), the remote columns, the coarse groups
+  /// and the solve's absolute tolerance; sizes sys.row_ptr and sys.rhs.
+  void number_rows(Real dt);
+  /// Solves sys; free-surface rows hold surface_value(i) (a function of the scheme), negative pressures are
+  /// clipped to 0.
+  template <class SurfaceValue>
+  PressureSolveResult solve_pressure(const SurfaceValue& surface_value);
+  /// Refreshes these fields at the ghosts from their owners.
+  void refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report);
+  /// Fluid particles outside the case's domain are removed (with the ghosts, renewed at the next step).
+  std::size_t remove_escaped();
+
+  ParticleSet& p;
+  Distribution& dist;
+  FluidOptions opt;
+  TankMotion motion;
+  int rank = 0;
+  Real dp = 0, re_g = 0, re_l = 0, r_max = 0;
+  LatticeConstants lat_g, lat_l;
+  Real beta1 = 0, beta2 = 0;
+  Vec gravity = Vec::Zero();       ///< of the current step: gravity_full times the ramp at its middle
+  Vec gravity_full = Vec::Zero();  ///< the case's gravity
+  Real gravity_ramp = 0;           ///< [s] (core/ramp.hpp)
+  TimeSpec time;
+  Rect domain;
+  Real rho = 1000, nu = 0, c = 20, kappa = 1;
+  Real lateral_friction = 0;  ///< k [1/s] of fluid.lateral_walls (0: off)
+  Real wall_omega = 0;        ///< the tank's angular velocity at the end of the current step
+  Real tolerance = 1e-8;
+  Real coarse_cell = 0;        ///< side of the pressure solve's coarse groups (0: none)
+  Real density_tolerance = 0;  ///< fluid.density_tolerance: absolute stop, RMS of r dt^2 / rho
+  Real density_tolerance_cap = std::numeric_limits<Real>::infinity();  ///< set_density_tolerance_cap
+  std::string preconditioner;
+  std::unique_ptr<PressureSolver> solver;
+  std::size_t n_steps = 0;
+  MPI_Comm comm = MPI_COMM_NULL;
+
+  // Work arrays, reused between steps.
+  std::vector<Role> roles;
+  NeighbourList nl, near;
+  CellGrid grid;
+  std::vector<Real> n_star;
+  std::vector<Vec> v_new, dv;
+  std::vector<LocalIndex> row_of;  ///< local column id of each particle's pressure unknown, -1 if none
+  std::vector<LocalIndex> particle_of_row;
+  LocalRows sys;
+  std::vector<Real> x_own;
+  std::vector<std::uint8_t> remove;
+};
+
+template <class SurfaceValue>
+PressureSolveResult FluidCore::solve_pressure(const SurfaceValue& surface_value) {
+  auto& pressure = p.scalar_field(fluid_fields::pressure);
+  const auto& surface = p.scalar_field(fluid_fields::free_surface);
+  const std::size_t n_rows = particle_of_row.size();
+  x_own.resize(n_rows);
+  for (std::size_t r = 0; r < n_rows; ++r) {
+    const auto i = static_cast<std::size_t>(particle_of_row[r]);
+    x_own[r] = surface[i] != 0 ? surface_value(i) : pressure[i];  // warm start
+  }
+  const PressureSolveResult res = solver->solve(sys, x_own);
+  std::fill(pressure.begin(), pressure.end(), 0.0);
+  for (std::size_t r = 0; r < n_rows; ++r) {
+    const auto i = static_cast<std::size_t>(particle_of_row[r]);
+    pressure[i] = surface[i] != 0 ? surface_value(i) : std::max(x_own[r], 0.0);
+  }
+  return res;
+}
+
+}  // namespace mpsfsi::fluid_detail

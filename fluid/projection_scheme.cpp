@@ -1,0 +1,535 @@
+// The default pressure scheme, the exact projection of the number density (fluid.scheme = projection;
+// fluid/fluid_parameters.hpp FluidScheme; docs/validation.md, "The default scheme: projection"): the rows
+// G p + p / (c^2 dt^2) = kappa rho / dt^2 (n* - n0) / n0 with G = (d/C) N N^T / n0 (N_ik = dn_i/dx_k), the wall
+// groups, the active set of the complementarity p >= 0, the start from rest, and the correction by the
+// transpose N^T p with its stiffness capped (fluid/fluid_solver.hpp, stiffness_number).
+#include "fluid/pressure_scheme.hpp"
+
+#include "core/kernel.hpp"
+#include "core/operators.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace mpsfsi::fluid_detail {
+
+namespace {
+
+class ProjectionScheme final : public PressureScheme {
+ public:
+  ProjectionScheme(FluidCore& fluid_core, const FluidParameters& fluid)
+      : core(fluid_core), p(core.p), dp(core.dp), re_g(core.re_g), lat_g(core.lat_g), lat_l(core.lat_l),
+        gravity(core.gravity),
+        rho(core.rho), c(core.c), kappa(core.kappa), n_steps(core.n_steps), comm(core.comm), roles(core.roles),
+        nl(core.nl), near(core.near), dv(core.dv), row_of(core.row_of), particle_of_row(core.particle_of_row),
+        sys(core.sys), x_own(core.x_own) {
+    max_active_set_solves = fluid.max_active_set_solves;
+    stabilisation = fluid.projection_stabilisation;
+    kernel = fluid.projection_kernel;
+    re_p = fluid.projection_radius * dp;
+    core.r_max = std::max(core.r_max, re_p);
+    const KernelSums sums = lattice_sums(kernel, dp, re_p);
+    n0_kernel = sums.n0;
+    c_lattice = sums.c;
+    p.add_scalar_field(reference_density_field, 0.0);
+    p.add_scalar_field(rest_offset_field, 0.0);
+    p.add_scalar_field(rest_rate_field, 0.0);
+  }
+
+  Real near_radius() const override { return std::max(re_g, re_p); }  // the kernel may reach further than re_g
+  // The ghosts' rows too: their dn/dx enter the pressure rows of their neighbours.
+  bool ghosts_need_neighbours() const override { return true; }
+
+  void before_predict(FluidStepReport& report) override {
+    if (n_steps != 0) return;
+    reference_densities();
+    core.refresh_ghosts({reference_density_field}, report);
+  }
+
+  bool keeps_surface() const override { return true; }
+
+  void after_surface() override {
+    const std::size_t n = p.n_owned();
+    auto& surface = p.scalar_field(fluid_fields::free_surface);
+    // A wall or solid row with no fluid particle within the kernel's reach constrains nothing that moves: it is
+    // a free-surface row (p = 0) and stays one until the water reaches it.
+    dry.assign(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (roles[i] != Role::boundary) continue;
+      bool wet = false;
+      for (std::size_t q = near.begin(i); q < near.end(i) && !wet; ++q)
+        wet = roles[static_cast<std::size_t>(near.index[q])] == Role::fluid;
+      dry[i] = !wet;
+      if (!wet) surface[i] = 1;
+    }
+  }
+
+  void prepare(Real) override {
+    step_alpha = initial_step() ? start_alpha : stabilisation;
+    projection_geometry();
+    gram_ready = false;
+  }
+
+  void assemble(const Real dt) override { assemble_projection(dt); }
+
+  /// The pressure a free-surface row holds: 0, or with the projection the hydrostatic pressure at a fluid
+  /// particle's centre, half a spacing below the surface, rho dp / 2 max(0, -g . n) with n the outward normal
+  /// -dn_k/dx_k / |dn_k/dx_k| (rho g dp / 2 on a level surface, 0 on a vertical one).
+  Real surface_value(const std::size_t i) const override { return surface_pressure[i]; }
+
+  int max_solves() const override { return max_active_set_solves; }
+
+  // Rows come back in the first two updates only.
+  bool update_rows(const int solves) override { return update_active_set(solves <= 2); }
+
+  void after_solve(const Real dt) override {
+    if (initial_step()) start_from_rest(dt);
+  }
+
+  void correct(const Real dt) override { correct_projection(dt); }
+
+ private:
+  /// The projection: in the initial state, each dummy particle's number density (its wall group's reference),
+  /// and each wall or solid particle's number density from its neighbours that are not fluid (the boundary
+  /// part of its row's density, held at that value: the walls' and solids' own motion is no density change).
+  static constexpr const char* reference_density_field = "reference_density";
+  /// The projection: each row particle's number density offset o = o_0 + o_2 dt^2 that makes the initial
+  /// state the scheme's equilibrium under the initial pressure at any dt (start_from_rest): o_0 here, o_2 in
+  /// rest_rate_field [1/s^2].
+  static constexpr const char* rest_offset_field = "rest_offset";
+  static constexpr const char* rest_rate_field = "rest_rate";
+
+  /// The projection, first step, at the initial positions: the reference densities (reference_density_field),
+  /// and each row's density error before the step moves anything (initial_error, by the rows' definition of
+  /// build_gram).
+  void reference_densities() {
+    auto& reference = p.scalar_field(reference_density_field);
+    initial_error.assign(p.n_owned(), 0.0);
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (roles[i] == Role::none) continue;
+      Real n_fluid_i = 0, n_other = 0;  // the kernel density from the fluid neighbours, from the others
+      for_each_pair(p.position, nl, re_p, i, [&](const std::size_t j) { return roles[j] != Role::none; },
+                    [&](const std::size_t j, const Vec&, const Real r2, Real) {
+                      (roles[j] == Role::fluid ? n_fluid_i : n_other) += kernel_at(kernel, std::sqrt(r2), re_p).w;
+                    });
+      initial_error[i] = n_fluid_i + n_other - n0_kernel;
+      if (p.kind[i] == ParticleKind::dummy) reference[i] = n_fluid_i + n_other;
+      else if (roles[i] != Role::fluid) reference[i] = n_other;
+    }
+  }
+
+  // ---- the exact projection (fluid.scheme = projection; fluid/fluid_parameters.hpp) ----
+
+  /// dn_k/dx_k at every particle with a row in the near list (owned and ghosts), with the projection's kernel,
+  /// and the scale d / C of the force, C the mean over the interior fluid particles of sum_j -w'(r_ij) r_ij
+  /// (sum_j re / r_ij = n0 + N0 on the lattice for the MPS weight), so that -(d/C) N^T p is -grad p for a
+  /// linear pressure on the current arrangement.
+  void projection_geometry() {
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const std::size_t n = near.n_particles();
+    // The near list holds the pairs within re_g of particles that take part (build_near_list): entry q of
+    // row k, neighbour j, gets dn_j/dx_k; by the symmetry of w, dn_k/dx_k is their sum.
+    // Also the kernel's number density n_k and sum_j -w'(r_jk) r_jk (C of the particle).
+    dn_pair.resize(near.n_pairs());
+    dn_self.resize(n);
+    n_kernel.resize(n);
+    n_fluid.resize(n);
+    c_of.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec s = Vec::Zero();
+      Real n_k = 0, n_f = 0, c_k = 0;
+      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+        const auto j = static_cast<std::size_t>(near.index[q]);
+        const Vec r_jk = p.position[k] - p.position[j];
+        const Real r = r_jk.norm();
+        const KernelValue kv = kernel_at(kernel, r, re_p);
+        dn_pair[q] = (kv.dw / r) * r_jk;
+        s += dn_pair[q];
+        n_k += kv.w;
+        if (roles[j] == Role::fluid) n_f += kv.w;
+        c_k -= kv.dw * r;
+      }
+      dn_self[k] = s;
+      n_kernel[k] = n_k;
+      n_fluid[k] = n_f;
+      c_of[k] = c_k;
+    }
+    Real sums[2] = {0, 0};  // sum over the interior fluid particles of sum_j -w'(r_ij) r_ij, their count
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (roles[i] != Role::fluid || surface[i] != 0) continue;
+      sums[0] += c_of[i];
+      sums[1] += 1;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);
+    const Real c_sum = sums[1] > 0 ? sums[0] / sums[1] : c_lattice;
+    projection_scale = dim / c_sum;
+    wall_groups();
+    surface_pressures();
+  }
+
+  /// The wall groups: each dummy particle within re_g of a wall particle joins the group of the nearest one
+  /// (ties to the smaller global id, so that every rank that holds both decides alike). A group shares the
+  /// wall particle's pressure unknown: the dummies carry its pressure in the force, and the group's row
+  /// constrains the sum of its members' number densities (each against its initial value). Without it the
+  /// dummies push with p = 0, and water at rest on the lattice feels a net force of up to 2.3 g toward the
+  /// walls (docs/validation.md, ## Fluid).
+  void wall_groups() {
+    const std::size_t n = near.n_particles();
+    parent_of.assign(n, -1);
+    group_error.assign(n, 0.0);
+    const auto& reference = p.scalar_field(reference_density_field);
+    for (std::size_t m = 0; m < n; ++m) {
+      if (p.kind[m] != ParticleKind::dummy || roles[m] != Role::dummy) continue;
+      Real best = std::numeric_limits<Real>::max();
+      GlobalId best_id = 0;
+      for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
+        const auto j = static_cast<std::size_t>(near.index[q]);
+        const Real r2 = (p.position[j] - p.position[m]).squaredNorm();
+        if (p.kind[j] != ParticleKind::wall || roles[j] != Role::boundary) continue;
+        if (r2 < best * (1 - 1e-12) || (r2 <= best * (1 + 1e-12) && p.global_id[j] < best_id)) {
+          best = r2;
+          best_id = p.global_id[j];
+          parent_of[m] = static_cast<LocalIndex>(j);
+        }
+      }
+      if (parent_of[m] >= 0) group_error[m] = n_kernel[m] - reference[m];
+    }
+  }
+
+  /// The pressure unknown (local column) of particle j: its own row, its wall group's, or none (-1).
+  LocalIndex column_of(const std::size_t j) const {
+    if (row_of[j] >= 0) return row_of[j];
+    if (j < parent_of.size() && parent_of[j] >= 0) return row_of[static_cast<std::size_t>(parent_of[j])];
+    return -1;
+  }
+
+  /// The projection's operator over this rank's rows (every row particle, whatever its free-surface flag),
+  /// (1 - alpha) G + alpha s L_g. G = (d/C) N N^T / n0, N_ik = dn_i/dx_k over the fluid particles k (the ones
+  /// the force moves). L_g is minus the Laplacian of eq. 12 at re_gradient over the row neighbours (pair
+  /// weights 2d w_ij / (lambda n0)), s = C / (d n0) its factor to G's long-wave limit, so that alpha changes
+  /// neither a smooth pressure nor the hydrostatic one in the bulk, and damps the oscillating pressures that G
+  /// alone leaves free (N^T p of a checkerboard p is nearly zero). Built once per step, after the rows are
+  /// numbered (assemble), and filtered by the active set at each solve.
+  void build_gram(const Real dt) {
+    const std::size_t n_rows = particle_of_row.size();
+    const auto& rest_offset = p.scalar_field(rest_offset_field);
+    const auto& rest_rate = p.scalar_field(rest_rate_field);
+    const auto& reference = p.scalar_field(reference_density_field);
+    const std::size_t n_columns = n_rows + sys.remote_id.size();
+    acc.assign(n_columns, 0.0);
+    lap_acc.assign(n_columns, 0.0);
+    touched_flag.assign(n_columns, 0);
+    touched.clear();
+    gram_ptr.assign(n_rows + 1, 0);
+    gram_col.clear();
+    gram_val.clear();
+    column_particle.assign(n_columns, 0);
+    for (std::size_t j = 0; j < p.size(); ++j)
+      if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
+    const Real scale = (1.0 - step_alpha) * projection_scale / n0_kernel;
+    const Real lap_scale = step_alpha / (projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
+    const auto add_column = [&](const std::size_t col, const Real v) {
+      if (!touched_flag[col]) {
+        touched_flag[col] = 1;
+        touched.push_back(static_cast<LocalIndex>(col));
+      }
+      acc[col] += v;
+    };
+    const auto add = [&](const std::size_t j, const Real v) { add_column(static_cast<std::size_t>(row_of[j]), v); };
+    const auto add_laplacian_column = [&](const std::size_t col, const Real v) {
+      add_column(col, 0.0);
+      lap_acc[col] += v;
+    };
+    // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
+    // (dn_pair of row k's entries).
+    const auto visit_k = [&](const std::size_t k, const Vec& n_ik) {
+      if (has_row(roles[k])) add(k, n_ik.dot(dn_self[k]));
+      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+        const LocalIndex col = column_of(static_cast<std::size_t>(near.index[q]));
+        if (col >= 0) add_column(static_cast<std::size_t>(col), n_ik.dot(dn_pair[q]));
+      }
+    };
+    // The members of each row's wall group (dummies whose parent is the row's particle).
+    member_ptr.assign(n_rows + 1, 0);
+    for (std::size_t m = 0; m < parent_of.size(); ++m)
+      if (parent_of[m] >= 0 && static_cast<std::size_t>(parent_of[m]) < p.n_owned())
+        ++member_ptr[static_cast<std::size_t>(row_of[static_cast<std::size_t>(parent_of[m])]) + 1];
+    for (std::size_t r = 0; r < n_rows; ++r) member_ptr[r + 1] += member_ptr[r];
+    members.resize(member_ptr[n_rows]);
+    {
+      std::vector<std::size_t> fill(member_ptr.begin(), member_ptr.end() - 1);
+      for (std::size_t m = 0; m < parent_of.size(); ++m)
+        if (parent_of[m] >= 0 && static_cast<std::size_t>(parent_of[m]) < p.n_owned())
+          members[fill[static_cast<std::size_t>(row_of[static_cast<std::size_t>(parent_of[m])])]++] = static_cast<LocalIndex>(m);
+    }
+    // Each row's density error: its particle's against n0, plus its group's dummies' against their references.
+    row_error.resize(n_rows);
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      // A wall or solid row: its fluid neighbours' part of the density, and the rest at its reference.
+      const Real n_i = roles[i] == Role::fluid ? n_kernel[i] : n_fluid[i] + reference[i];
+      row_error[r] = n_i - n0_kernel + rest_offset[i] + rest_rate[i] * dt * dt;
+      for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) row_error[r] += group_error[static_cast<std::size_t>(members[e])];
+    }
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (step_alpha < 1) {  // G (at alpha = 1 the matrix is the scaled Laplacian alone)
+        if (roles[i] == Role::fluid) visit_k(i, dn_self[i]);
+        // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
+        for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
+          const auto k = static_cast<std::size_t>(near.index[q]);
+          if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
+        }
+        for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) {
+          const auto m = static_cast<std::size_t>(members[e]);
+          for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
+            const auto k = static_cast<std::size_t>(near.index[q]);
+            if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
+          }
+        }
+      }
+      if (step_alpha > 0)
+        // The pairs of the row's group (its particle and its dummies) with the other groups' particles.
+        for (std::size_t e = member_ptr[r]; e <= member_ptr[r + 1]; ++e) {
+          const std::size_t a = e < member_ptr[r + 1] ? static_cast<std::size_t>(members[e]) : i;
+          for (std::size_t q = near.begin(a); q < near.end(a); ++q) {
+            const auto j = static_cast<std::size_t>(near.index[q]);
+            const LocalIndex col = column_of(j);
+            if (col < 0 || static_cast<std::size_t>(col) == r) continue;
+            const Real v = lap_scale * weight((p.position[j] - p.position[a]).norm(), re_g);
+            add_laplacian_column(static_cast<std::size_t>(col), -v);
+            add_laplacian_column(r, v);
+          }
+        }
+      if (!touched_flag[r]) {
+        touched_flag[r] = 1;
+        touched.push_back(static_cast<LocalIndex>(r));
+      }
+      std::sort(touched.begin(), touched.end());
+      for (const LocalIndex col : touched) {
+        const auto q = static_cast<std::size_t>(col);
+        gram_col.push_back(col);
+        gram_val.push_back(scale * acc[q] + lap_acc[q]);
+        acc[q] = 0;
+        lap_acc[q] = 0;
+        touched_flag[q] = 0;
+      }
+      touched.clear();
+      gram_ptr[r + 1] = gram_col.size();
+    }
+  }
+
+  /// The rows of the projection: G p + p / (c^2 dt^2) = kappa rho / dt^2 (n*_i - n0) / n0 (build_gram) over the
+  /// rows and columns that are not free surface; free-surface rows p = 0.
+  void assemble_projection(const Real dt) {
+    if (!gram_ready) {
+      build_gram(dt);
+      gram_ready = true;
+    }
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const std::size_t n_rows = particle_of_row.size();
+    sys.col.clear();
+    sys.value.clear();
+    // The first step solves for the incompressible pressure (kappa 1, start_compressibility of the case's).
+    const Real compress = (initial_step() ? start_compressibility : 1.0) / (c * c * dt * dt);
+    const Real source = (initial_step() ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
+    projection_source = source;
+    const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + compress;
+    sys.row_ptr[0] = 0;
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (surface[i] != 0) {
+        sys.col.push_back(static_cast<LocalIndex>(r));
+        sys.value.push_back(dirichlet_diag);
+        sys.rhs[r] = dirichlet_diag * surface_pressure[i];
+      } else {
+        sys.rhs[r] = source * row_error[r];
+        for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
+          const auto q = static_cast<std::size_t>(gram_col[e]);
+          const auto j = static_cast<std::size_t>(column_particle[q]);
+          if (surface[j] != 0) {
+            sys.rhs[r] -= gram_val[e] * surface_pressure[j];
+            continue;
+          }
+          sys.col.push_back(gram_col[e]);
+          sys.value.push_back(gram_val[e] + (q == r ? compress : 0.0));
+        }
+      }
+      sys.row_ptr[r + 1] = sys.col.size();
+    }
+  }
+
+  /// The complementarity of the density constraint, p >= 0, w = A p - b >= 0, p w = 0 (a primal-dual active
+  /// set step): rows whose pressure came out negative become free-surface (p = 0) rows; free-surface rows whose
+  /// density the other rows' pressures do not bring down to n0 (w_i < 0, the particle would stay compressed)
+  /// become rows again, with `additions` only (the later updates of one time step only remove rows: the set
+  /// then shrinks and the iteration ends; a primal-dual active set can cycle when the matrix is not an
+  /// M-matrix, as this one is not). The pressures of the ghosts must be current. Whether any row changed on any rank.
+  bool update_active_set(const bool additions) {
+    auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const auto& pressure = p.scalar_field(fluid_fields::pressure);
+    const Real w_tolerance = 1e-9 * projection_source * n0_kernel;  // a relative density change of 1e-9
+    int changed = 0;
+    for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (surface[i] == 0) {
+        if (x_own[r] < 0) {
+          surface[i] = 1;
+          changed = 1;
+        }
+        continue;
+      }
+      if (!additions || dry[i]) continue;
+      Real w = -projection_source * row_error[r];
+      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
+        w += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
+      if (w < -w_tolerance) {
+        surface[i] = 0;
+        changed = 1;
+      }
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_MAX, comm);
+    return changed != 0;
+  }
+
+  /// The projection's first step (the start from rest), whose system is the incompressible one: kappa 1, the
+  /// compressibility start_compressibility of the case's, stabilisation start_alpha.
+  bool initial_step() const { return n_steps == 0; }
+
+  /// The start from rest, after the first step's solve: its pressure p0 holds the fluid. Each row then gets
+  /// the offset o that makes p0 the solution of the later steps' system in the state this step leaves,
+  /// (G' + eps) p0 = kappa S (b + o), b the row's density error, S = rho / (dt^2 n0), eps = 1 / (c^2 dt^2),
+  /// G' the matrix of projection_stabilisation. b = b_0 + (b - b_0), b_0 the error at the initial positions
+  /// and b - b_0 the prediction's, which grows as dt^2 (the fluid falls g dt^2); so does G' p0 / (kappa S).
+  /// Hence o = o_0 + o_2 dt^2 holds p0 at every later dt: o_0 = eps p0 / (kappa S) - b_0 = p0 n0 / (kappa rho
+  /// c^2) - b_0, o_2 = (G' p0 / (kappa S) - (b - b_0)) / dt^2. So the fluid starts in its discrete equilibrium,
+  /// compressed as the weak compressibility wants it, instead of having to compress and ring first
+  /// (docs/validation.md, ## Fluid).
+  void start_from_rest(const Real dt) {
+    step_alpha = stabilisation;
+    build_gram(dt);  // G' of the later steps (the offsets are still 0: row_error is b)
+    auto& rest_offset = p.scalar_field(rest_offset_field);
+    auto& rest_rate = p.scalar_field(rest_rate_field);
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const auto& pressure = p.scalar_field(fluid_fields::pressure);  // p0, current at the ghosts
+    const Real s = kappa * rho / (dt * dt) / n0_kernel;
+    for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
+      const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (surface[i] != 0) continue;
+      Real g_p = 0;  // (G' p0)_r, free-surface columns at their pressure
+      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
+        g_p += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
+      rest_offset[i] = pressure[i] * n0_kernel / (kappa * rho * c * c) - initial_error[i];
+      rest_rate[i] = (g_p / s - (row_error[r] - initial_error[i])) / (dt * dt);
+    }
+  }
+
+  /// The projection's correction: v_k += -(dt/rho)(d/C) sum_j (p_k + p_j - 2 b_k) dn_j/dx_k, r_k += dt dv_k, for
+  /// the fluid particles k; the sum runs over the neighbours j that carry a pressure (rows and wall groups; the
+  /// others add p_k dn_j/dx_k). With b_k = 0 it is the transpose of the rows' operator, (d/C)(p_k dn_k/dx_k +
+  /// sum_j p_j dn_j/dx_k); b_k = max(0, p_k - p_cap) caps the pressure the force's stiffness carries
+  /// (stiffness_number in fluid/fluid_solver.hpp).
+  void correct_projection(const Real dt) {
+    const auto& pressure = p.scalar_field(fluid_fields::pressure);
+    const Real p_cap = stiffness_number * rho * dp * dp / (dt * dt);
+    const std::size_t n = p.n_owned();
+    dv.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      dv[k].setZero();
+      if (roles[k] != Role::fluid) continue;
+      Vec f = pressure[k] * dn_self[k];
+      const Real two_b = 2.0 * std::max(0.0, pressure[k] - p_cap);
+      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+        const auto j = static_cast<std::size_t>(near.index[q]);
+        if (has_row(roles[j])) f += (pressure[j] - two_b) * dn_pair[q];
+        else if (parent_of[j] >= 0) f += (pressure[static_cast<std::size_t>(parent_of[j])] - two_b) * dn_pair[q];
+      }
+      dv[k] = -dt / rho * projection_scale * f;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      if (roles[k] != Role::fluid) continue;
+      p.velocity[k] += dv[k];
+      p.position[k] += dt * dv[k];
+    }
+  }
+
+  /// The projection: surface_value of every particle in the near list (owned and ghosts).
+  void surface_pressures() {
+    const std::size_t n = near.n_particles();
+    surface_pressure.assign(n, 0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Real norm = dn_self[k].norm();
+      if (roles[k] != Role::fluid || !(norm > 0)) continue;
+      surface_pressure[k] = 0.5 * rho * dp * std::max(0.0, gravity.dot(dn_self[k]) / norm);
+    }
+  }
+
+
+  FluidCore& core;
+  // The core's state under the names the scheme's formulas use.
+  ParticleSet& p;
+  const Real& dp;
+  const Real& re_g;
+  const LatticeConstants& lat_g;
+  const LatticeConstants& lat_l;
+  const Vec& gravity;
+  const Real& rho;
+  const Real& c;
+  const Real& kappa;
+  const std::size_t& n_steps;
+  const MPI_Comm& comm;
+  const std::vector<Role>& roles;
+  NeighbourList& nl;
+  NeighbourList& near;
+  std::vector<Vec>& dv;
+  std::vector<LocalIndex>& row_of;
+  std::vector<LocalIndex>& particle_of_row;
+  LocalRows& sys;
+  std::vector<Real>& x_own;
+  Real re_p = 0;  ///< radius of the projection's density kernel (fluid.projection_radius)
+  Real step_alpha = 0;            ///< the stabilisation of this step's matrix: start_alpha in the first step, else alpha
+  /// The first step's stabilisation: nearly the exact projection, whose pressure balances gravity in the
+  /// force's own terms, with enough of the Laplacian to keep G's near-null pressure modes out of p0 (at 0 they
+  /// put errors of up to 90 % next to the walls at dp 1 cm; docs/validation.md, ## Fluid).
+  static constexpr Real start_alpha = 0.1;
+  /// The first step's compressibility, as a share of the case's 1 / c^2: nearly incompressible.
+  static constexpr Real start_compressibility = 1e-4;
+  int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
+  Real stabilisation = 0;         ///< alpha of fluid.projection_stabilisation
+  DensityKernel kernel = DensityKernel::wendland;  ///< fluid.projection_kernel
+  Real n0_kernel = 0;             ///< n0 of that kernel at re_gradient
+  Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
+  Real projection_scale = 0;      ///< d / C of the projection (projection_geometry)
+  Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
+
+  std::vector<Vec> dn_self;              ///< projection: dn_k/dx_k
+  std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
+  std::vector<Real> surface_pressure;    ///< projection: the pressure of each particle as a free-surface row
+  std::vector<Real> n_kernel, c_of;      ///< projection: each particle's kernel density, sum_j -w' r
+  std::vector<Real> n_fluid;             ///< projection: the fluid neighbours' part of n_kernel
+  std::vector<Real> initial_error;       ///< projection, first step: each row's density error at the start
+  std::vector<std::uint8_t> dry;         ///< projection: a wall or solid row without a fluid neighbour
+  std::vector<LocalIndex> parent_of;     ///< projection: the wall particle whose group a dummy joins, or -1
+  std::vector<Real> group_error;         ///< projection: a group dummy's density minus its reference
+  std::vector<std::size_t> member_ptr;   ///< projection: each row's group dummies (CSR)
+  std::vector<LocalIndex> members;
+  std::vector<Real> row_error;           ///< projection: each row's density error (with its group's)
+  std::vector<Real> acc;                 ///< projection: a row's entries by column while it is assembled (G ...
+  std::vector<Real> lap_acc;             ///< ... and the stabilisation)
+  std::vector<std::uint8_t> touched_flag;
+  std::vector<LocalIndex> touched;
+  std::vector<std::size_t> gram_ptr;     ///< projection: the operator G of build_gram (CRS, sorted columns)
+  std::vector<LocalIndex> gram_col;
+  std::vector<Real> gram_val;
+  std::vector<LocalIndex> column_particle;  ///< projection: the particle of each column
+  bool gram_ready = false;                  ///< G built for this step
+};
+
+}  // namespace
+
+std::unique_ptr<PressureScheme> make_projection_scheme(FluidCore& core, const FluidParameters& parameters) {
+  return std::make_unique<ProjectionScheme>(core, parameters);
+}
+
+}  // namespace mpsfsi::fluid_detail
