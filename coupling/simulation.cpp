@@ -19,6 +19,7 @@
 #include "coupling/fsi_interface.hpp"
 #include "coupling/time_step_policy.hpp"
 #include "coupling/rank0.hpp"
+#include "coupling/run_log.hpp"
 
 #include "fluid/fluid_solver.hpp"
 #include "io/probes.hpp"
@@ -98,13 +99,12 @@ class RunLoop {
         probes_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/probes.csv" : std::string(),
                 appends("probes.csv")),
         receivers_(spec, scene.particles, rank_of(comm) == 0 ? settings.output_dir + "/receivers.csv" : std::string(),
-                   appends("receivers.csv")) {
+                   appends("receivers.csv")),
+        log_(settings.output_dir, appends("run.jsonl"), settings.quiet, rank_of(comm)) {
     MPI_Comm_rank(comm, &rank_);
     MPI_Comm_size(comm, &n_ranks_);
     // The scene is whole on every rank here: count, then distribute.
     initial_fluid_ = fluid_per_body(false);
-    log_ = rank_ == 0 && !settings.quiet;
-    tty_ = log_ && isatty(fileno(stdout));
     const bool has_fluid = p_.n_of_kind(ParticleKind::fluid) > 0, has_solid = p_.n_of_kind(ParticleKind::solid) > 0;
     has_solid_ = has_solid;
     DistributionSettings ds;
@@ -141,10 +141,6 @@ class RunLoop {
     check_output_fields();
     writer_.set_fields(spec.output.fields);
     summary_.pvd_path = writer_.pvd_path();
-    if (rank_ == 0) {
-      jsonl_.open(settings.output_dir + "/run.jsonl", appends("run.jsonl") ? std::ios::app : std::ios::trunc);
-      if (!jsonl_) throw std::runtime_error("cannot write " + settings.output_dir + "/run.jsonl");
-    }
     next_output_ = spec.output.interval;
     next_probe_ = spec.output.probe_interval.value_or(0);
     if (settings.restart) load_checkpoint(*settings.restart);
@@ -195,11 +191,9 @@ class RunLoop {
     // The end state, to extend the run; after a signal always, to continue it.
     if ((every > 0 || summary_.interrupted_by != 0) && last_checkpoint != t_) write_checkpoint_now();
     report_progress(t_start, true);
-    if (summary_.interrupted_by != 0 && rank_ == 0) {
-      jsonl_ << fmt::format("{{\"event\":\"interrupted\",\"signal\":\"{}\",\"step\":{},\"t\":{:.9g}}}\n",
-                            signal_name(summary_.interrupted_by), step_, t_);
-      jsonl_.flush();
-    }
+    if (summary_.interrupted_by != 0)
+      log_.event(fmt::format("{{\"event\":\"interrupted\",\"signal\":\"{}\",\"step\":{},\"t\":{:.9g}}}",
+                             signal_name(summary_.interrupted_by), step_, t_));
     summary_.n_steps = step_;
     summary_.end_time = t_;
     summary_.wall_seconds = seconds_since(t_start);
@@ -221,11 +215,11 @@ class RunLoop {
       std::string by_limit;
       for (const auto& [name, n] : summary_.steps_by_limit)
         by_limit += fmt::format("{}\"{}\":{}", by_limit.empty() ? "" : ",", name, n);
-      jsonl_ << fmt::format(
+      log_.event(fmt::format(
           "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
           "\"coupling\":{:.3f},\"output\":{:.3f},\"removed\":{},\"subcycles_raised_steps\":{},"
           "\"peak_memory_kib\":{},\"dt_min\":{:.6g},\"t_of_dt_min\":{:.9g},\"limit_of_dt_min\":\"{}\","
-          "\"steps_by_limit\":{{{}}}{}}}\n",
+          "\"steps_by_limit\":{{{}}}{}}}",
           step_, t_, summary_.wall_seconds, summary_.t_fluid, summary_.t_solid, summary_.t_coupling, summary_.t_output,
           summary_.n_removed, summary_.n_subcycles_raised, summary_.peak_memory_kib, summary_.dt_min,
           summary_.t_of_dt_min, summary_.limit_of_dt_min, by_limit,
@@ -234,7 +228,7 @@ class RunLoop {
                             "\"coupling_unconverged\":{}",
                             summary_.coupling_iterations, summary_.coupling_iterations_max, summary_.coupling_windows,
                             summary_.n_unconverged)
-              : std::string());
+              : std::string()));
     }
     return summary_;
   }
@@ -264,12 +258,12 @@ class RunLoop {
     step_limit_ = limit;
     if (plan.subcycles_raised) {
       ++summary_.n_subcycles_raised;
-      if (!raised_said_ && log_)
-        fmt::print("{}step {}: subcycles {} would give a solid dt of {:.3e} s > the solid's stable dt {:.3e} s "
-                   "(solid.dt_factor dp / c_p); raised to {} (and whenever needed from now on, counted in the "
-                   "summary)\n",
-                   tty_ ? "\n" : "", step_ + 1, spec_.coupling.subcycles, dt / spec_.coupling.subcycles,
-                   plan.solid_stable_dt, n_sub);
+      if (!raised_said_)
+        log_.note(fmt::format("step {}: subcycles {} would give a solid dt of {:.3e} s > the solid's stable dt {:.3e} s "
+                              "(solid.dt_factor dp / c_p); raised to {} (and whenever needed from now on, counted in "
+                              "the summary)",
+                              step_ + 1, spec_.coupling.subcycles, dt / spec_.coupling.subcycles, plan.solid_stable_dt,
+                              n_sub));
       raised_said_ = true;
     }
     ++summary_.steps_by_limit[limit];
@@ -305,9 +299,9 @@ class RunLoop {
       }
       if (fluid_) {
         summary_.n_removed += last_fluid_.n_removed;
-        if (last_fluid_.n_removed > 0 && log_)
-          fmt::print("{}step {}: {} fluid particle(s) left the domain and were removed ({} so far)\n", tty_ ? "\n" : "",
-                     step_ + 1, last_fluid_.n_removed, summary_.n_removed);
+        if (last_fluid_.n_removed > 0)
+          log_.note(fmt::format("step {}: {} fluid particle(s) left the domain and were removed ({} so far)", step_ + 1,
+                                last_fluid_.n_removed, summary_.n_removed));
       }
     } catch (const RunFailure& e) {
       fail_within_step(e.what());
@@ -353,9 +347,8 @@ class RunLoop {
     if (ic.on_max_iterations == NonConvergence::stop)
       return what + "; coupling.implicit.on_max_iterations = stop (raise max_iterations, loosen the tolerance, or "
                     "choose another acceleration)";
-    if (!unconverged_said_ && log_)
-      fmt::print("{}{}; the run goes on with the last iterate (said once; the summary counts such steps)\n",
-                 tty_ ? "\n" : "", what);
+    if (!unconverged_said_)
+      log_.note(what + "; the run goes on with the last iterate (said once; the summary counts such steps)");
     unconverged_said_ = true;
     return {};
   }
@@ -444,9 +437,7 @@ class RunLoop {
   /// with a warning when that cannot finish in any sensible time.
   void report_projection() {
     const RunProjection r = project_run(spec_, p_, t_, comm_);  // counts summed over the ranks (a collective)
-    if (!log_) return;
-    fmt::print("{}\n", r.text());
-    std::fflush(stdout);
+    log_.print(r.text());
   }
 
   /// After the first steps: the projected number of steps and wall time at the measured rate.
@@ -456,18 +447,16 @@ class RunLoop {
     const double steps = static_cast<double>(step_ - step_begin_);
     const double remaining_steps = (spec_.time.end - t_) / dt_;
     const double remaining_wall = wall / steps * remaining_steps;
-    jsonl_ << fmt::format("{{\"event\":\"projection\",\"step\":{},\"remaining_steps\":{:.4g},\"remaining_wall\":{:.4g}}}\n",
-                          step_, remaining_steps, remaining_wall);
-    if (!log_) return;
-    fmt::print("{}projection after {} steps: about {:.3g} more steps at dt {:.3g} s ({}), {} of wall time at {:.3g} "
-               "steps/s\n",
-               tty_ ? "\n" : "", step_ - step_begin_, remaining_steps, dt_, limit_, format_duration(remaining_wall),
-               steps / std::max(wall, 1e-9));
+    log_.event(fmt::format("{{\"event\":\"projection\",\"step\":{},\"remaining_steps\":{:.4g},\"remaining_wall\":{:.4g}}}",
+                           step_, remaining_steps, remaining_wall));
+    log_.note(fmt::format("projection after {} steps: about {:.3g} more steps at dt {:.3g} s ({}), {} of wall time at "
+                          "{:.3g} steps/s",
+                          step_ - step_begin_, remaining_steps, dt_, limit_, format_duration(remaining_wall),
+                          steps / std::max(wall, 1e-9)));
     if (remaining_wall > absurd_wall_seconds)
-      fmt::print("warning: at this rate the run needs {} of wall time; it cannot finish in any sensible time "
-                 "(coarsen dp, shorten time.end, or look at the dt limit '{}')\n",
-                 format_duration(remaining_wall), limit_);
-    std::fflush(stdout);
+      log_.print(fmt::format("warning: at this rate the run needs {} of wall time; it cannot finish in any sensible "
+                             "time (coarsen dp, shorten time.end, or look at the dt limit '{}')",
+                             format_duration(remaining_wall), limit_));
   }
 
   /// Keep a copy of the particle set as the frame written if a later step fails. The copy costs about as much
@@ -521,12 +510,9 @@ class RunLoop {
     } catch (const std::exception& e) {
       frame = std::string("(could not be written: ") + e.what() + ")";
     }
-    if (rank_ == 0) {
-      jsonl_ << fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}\n", step_ + 1, t_,
-                            json_escape(diagnosis));
-      jsonl_.flush();
-    }
-    if (tty_) fmt::print("\n");
+    log_.event(fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}", step_ + 1, t_,
+                           RunLog::json_escape(diagnosis)));
+    log_.end_line();
     throw RunFailure(fmt::format("{}\nlast good frame (t = {:.6g} s, after step {}): {}", diagnosis, last_good_t_,
                                  last_good_step_, frame));
   }
@@ -556,7 +542,7 @@ class RunLoop {
     try {
       // Every rank writes its piece; once all are complete, rank 0 adds the frame to the series.
       on_every_rank(comm_, [&] {
-        if (!log_error_.empty()) throw OutputError(log_error_);  // found on rank 0 alone, stops all ranks here
+        if (!log_.error().empty()) throw OutputError(log_.error());  // found on rank 0 alone, stops all ranks here
         if (rank_ == 0) check_output_folder();
         writer_.write_piece(p_, t_);
       });
@@ -586,11 +572,9 @@ class RunLoop {
                           writer_.frames().back().first)
             : fmt::format("no frame was written");
     const std::string text = fmt::format("{}\nthe run stopped at t = {:.6g} s (step {}); {}", cause, t_, step_, frames);
-    if (rank_ == 0 && jsonl_.is_open()) {
-      jsonl_ << fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}\n", step_, t_,
-                            json_escape(text));
-      jsonl_.flush();  // may fail as well on a full disk: the message on stderr is the one that counts
-    }
+    // May fail as well on a full disk: the message on stderr is the one that counts.
+    log_.event(fmt::format("{{\"event\":\"failure\",\"step\":{},\"t\":{:.9g},\"diagnosis\":\"{}\"}}", step_, t_,
+                           RunLog::json_escape(text)));
     return text;
   }
 
@@ -617,31 +601,19 @@ class RunLoop {
                                          t_, 100 * frac, step_, rate, format_duration(eta), dt_, limit_, ppe, sub);
     // A step is logged once: the final line of a run that ends on a periodic step is not written again.
     const bool due = (periodic || final) && step_ != logged_step_;
-    if (due) {
-      logged_step_ = step_;
-      jsonl_ << fmt::format(
-          "{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\",\"ppe_iterations\":{},"
-          "\"ppe_solves\":{},\"ppe_residual\":{:.3g},\"subcycles\":{},{}\"wall\":{:.3f}}}\n",
-          step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.solves, last_fluid_.residual, summary_.last_subcycles,
-          implicit ? fmt::format("\"coupling_iterations\":{},\"coupling_residual\":{:.3g},\"coupling_converged\":{},",
-                                 last_window_.iterations, last_window_.residual, last_window_.converged)
-                   : std::string(),
-          wall);
-      jsonl_.flush();  // `tail -f run.jsonl` follows the run
-      if (!jsonl_ && log_error_.empty()) log_error_ = "cannot write run log '" + settings_.output_dir + "/run.jsonl'";
-    }
-    if (!log_) return;
-    if (tty_) {
-      if (final || seconds_since(last_tty_) > 0.2) {
-        fmt::print("\r{:<120}", line);
-        if (final) fmt::print("\n");
-        std::fflush(stdout);
-        last_tty_ = Clock::now();
-      }
-    } else if (due) {
-      fmt::print("{}\n", line);
-      std::fflush(stdout);  // a redirected log gets each line as it is printed
-    }
+    if (due) logged_step_ = step_;
+    log_.progress(line,
+                  fmt::format("{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\","
+                              "\"ppe_iterations\":{},\"ppe_solves\":{},\"ppe_residual\":{:.3g},\"subcycles\":{},{}"
+                              "\"wall\":{:.3f}}}",
+                              step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.solves, last_fluid_.residual,
+                              summary_.last_subcycles,
+                              implicit ? fmt::format("\"coupling_iterations\":{},\"coupling_residual\":{:.3g},"
+                                                     "\"coupling_converged\":{},",
+                                                     last_window_.iterations, last_window_.residual, last_window_.converged)
+                                       : std::string(),
+                              wall),
+                  due, final);
   }
 
   /// Several ranks: the owned particles per rank, their imbalance, the time in owners and ghosts, the
@@ -659,10 +631,10 @@ class RunLoop {
       mean += static_cast<double>(n) / n_ranks_;
       largest = std::max(largest, static_cast<double>(n));
     }
-    jsonl_ << fmt::format(
+    log_.event(fmt::format(
         "{{\"event\":\"distribution\",\"step\":{},\"owned\":[{}],\"imbalance\":{:.4f},\"partitions\":{},"
-        "\"t_partition\":{:.3f},\"t_migrate\":{:.3f},\"t_halo\":{:.3f}}}\n",
-        step_, fmt::join(all, ","), mean > 0 ? largest / mean - 1 : 0.0, d.n_partitions, times[0], times[1], times[2]);
+        "\"t_partition\":{:.3f},\"t_migrate\":{:.3f},\"t_halo\":{:.3f}}}",
+        step_, fmt::join(all, ","), mean > 0 ? largest / mean - 1 : 0.0, d.n_partitions, times[0], times[1], times[2]));
   }
 
   bool appends(const std::string& file) const {
@@ -719,7 +691,6 @@ class RunLoop {
     if (coupling_) coupling_->save_state(w);
     w.bytes() += scheme.bytes();
     w.section("end");
-    jsonl_.flush();
     receivers_.flush();
     CheckpointInfo info;
     info.case_name = spec_.name;
@@ -741,12 +712,10 @@ class RunLoop {
     info.written_at = date;
     const std::string path = (std::filesystem::path(settings_.output_dir) / checkpoint_file_name(t_)).string();
     write_checkpoint(path, info, w.bytes());
-    jsonl_ << fmt::format("{{\"event\":\"checkpoint\",\"step\":{},\"t\":{:.9g},\"file\":\"{}\"}}\n", step_, t_,
-                          json_escape(path));
-    jsonl_.flush();
-    if (log_)
-      fmt::print("{}checkpoint at t = {:.6g} s (step {}): {} ({:.1f} MiB)\n", tty_ ? "\n" : "", t_, step_, path,
-                 static_cast<double>(w.bytes().size()) / (1024.0 * 1024.0));
+    log_.event(fmt::format("{{\"event\":\"checkpoint\",\"step\":{},\"t\":{:.9g},\"file\":\"{}\"}}", step_, t_,
+                           RunLog::json_escape(path)));
+    log_.note(fmt::format("checkpoint at t = {:.6g} s (step {}): {} ({:.1f} MiB)", t_, step_, path,
+                          static_cast<double>(w.bytes().size()) / (1024.0 * 1024.0)));
     written_.push_back(path);
     while (settings_.checkpoint_keep > 0 && written_.size() > static_cast<std::size_t>(settings_.checkpoint_keep)) {
       if (written_.front() != path) std::filesystem::remove(written_.front(), ec);
@@ -791,42 +760,29 @@ class RunLoop {
     } catch (const StateFormatError& e) {
       throw CaseError(std::string("checkpoint ") + e.what());
     }
-    if (!exact_ && log_)
-      fmt::print("note: the pressure preconditioner the checkpoint's run kept between setups "
+    if (!exact_)
+      log_.print("note: the pressure preconditioner the checkpoint's run kept between setups "
                  "(fluid.preconditioner_rebuild_every > 1) cannot be rebuilt here (it was saved on several ranks, or "
                  "the setting changed) and is set up anew: the continuation agrees with the original run to the "
-                 "solver tolerance, not bit for bit\n");
-    if (c.info.n_ranks != n_ranks_ && log_)
-      fmt::print("note: the checkpoint was written on {} rank(s), this run has {}: the particles are partitioned anew "
-                 "and the continuation agrees with the original run to the solver tolerance, not bit for bit\n",
-                 c.info.n_ranks, n_ranks_);
+                 "solver tolerance, not bit for bit");
+    if (c.info.n_ranks != n_ranks_)
+      log_.print(fmt::format("note: the checkpoint was written on {} rank(s), this run has {}: the particles are "
+                             "partitioned anew and the continuation agrees with the original run to the solver "
+                             "tolerance, not bit for bit",
+                             c.info.n_ranks, n_ranks_));
     on_rank0(comm_, [&] {
       if (settings_.continue_series)
         writer_.adopt_existing(t_, c.info.next_frame);
       else
         writer_.set_next_frame(c.info.next_frame);
-      jsonl_ << fmt::format("{{\"event\":\"restart\",\"step\":{},\"t\":{:.9g},\"checkpoint\":\"{}\"}}\n", step_, t_,
-                            json_escape(c.path));
-      jsonl_.flush();
+      log_.event(fmt::format("{{\"event\":\"restart\",\"step\":{},\"t\":{:.9g},\"checkpoint\":\"{}\"}}", step_, t_,
+                             RunLog::json_escape(c.path)));
     });
     if (n_ranks_ > 1) {  // every piece continues with rank 0's frame number
       unsigned long long next = writer_.next_frame();
       MPI_Bcast(&next, 1, MPI_UNSIGNED_LONG_LONG, 0, comm_);
       writer_.set_next_frame(next);
     }
-  }
-
-  static std::string json_escape(const std::string& s) {
-    std::string out;
-    for (const char c : s) {
-      if (c == '"' || c == '\\') out += '\\';
-      if (c == '\n') {
-        out += "\\n";
-        continue;
-      }
-      out += c;
-    }
-    return out;
   }
 
   const CaseSpec& spec_;
@@ -838,10 +794,10 @@ class RunLoop {
   TimeStepPolicy step_policy_;
   std::string step_limit_ = "-";            ///< the dt limit of the step being taken
   std::size_t logged_step_ = static_cast<std::size_t>(-1);  ///< the last step written to run.jsonl
-  std::string log_error_;                   ///< rank 0: run.jsonl could not be written (reported at the next output)
   VtkSeriesWriter writer_;
   ProbeWriter probes_;
   ReceiverWriter receivers_;  ///< receivers.csv (rank 0), rows every step or every receivers.interval
+  RunLog log_;                ///< the progress line, notes and run.jsonl (the writers above make the folder)
   std::unique_ptr<Distribution> dist_;
   bool has_solid_ = false;  ///< the case has a solid
   /// Steps between checks of the owned work's balance (re-partition above the threshold).
@@ -860,10 +816,7 @@ class RunLoop {
   CouplingWindow last_window_;         ///< the last coupled window (iterations, residual)
   bool unconverged_said_ = false;
   bool raised_said_ = false;
-  std::ofstream jsonl_;
   int rank_ = 0;
-  bool log_ = false, tty_ = false;
-  Clock::time_point last_tty_{};
   ParticleSet last_good_;
   Real last_good_t_ = 0;               ///< time of last_good_
   std::size_t last_good_step_ = 0;     ///< steps done when last_good_ was taken
