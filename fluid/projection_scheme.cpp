@@ -20,10 +20,9 @@ class ProjectionScheme final : public PressureScheme {
  public:
   ProjectionScheme(FluidCore& fluid_core, const FluidParameters& fluid)
       : core(fluid_core), p(core.p), dp(core.dp), re_g(core.re_g), lat_g(core.lat_g), lat_l(core.lat_l),
-        gravity(core.gravity),
-        rho(core.rho), c(core.c), kappa(core.kappa), n_steps(core.n_steps), comm(core.comm), roles(core.roles),
-        nl(core.nl), near(core.near), dv(core.dv), row_of(core.row_of), particle_of_row(core.particle_of_row),
-        sys(core.sys), x_own(core.x_own) {
+        gravity(core.gravity), rho(core.rho), c(core.c), kappa(core.kappa), n_steps(core.n_steps), comm(core.comm),
+        roles(core.roles), nl(core.nl), near(core.near), dv(core.dv), row_of(core.row_of),
+        particle_of_row(core.particle_of_row), sys(core.sys), x_own(core.x_own) {
     max_active_set_solves = fluid.max_active_set_solves;
     stabilisation = fluid.projection_stabilisation;
     kernel = fluid.projection_kernel;
