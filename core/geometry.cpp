@@ -88,6 +88,7 @@ std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, const Real radi
 std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, const Real dp, const bool open_top,
                                  const int n_dummy) {
   const IVec n = cells_of(lo, hi, dp);
+  const Vec face_hi = lo + n.cast<Real>() * dp;  // the lattice's faces (hi rounded to whole cells)
   const int n_layers = 1 + n_dummy;
   std::vector<WallPoint> pts;
   // Cell i of the extended lattice has centre lo + (i + 1/2) dp; the inner box is 0 <= i_a < n_a.
@@ -100,7 +101,8 @@ std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, const Real dp, co
     int layer = 0;
     for (int a = 0; a < dim; ++a) layer = std::max(layer, i[a] < 0 ? -i[a] : (i[a] >= n[a] ? i[a] - n[a] + 1 : 0));
     if (layer == 0) return;  // inside the box
-    pts.push_back({centre(lo, i, dp), layer == 1});
+    const Vec x = centre(lo, i, dp);
+    pts.push_back({x, layer == 1, x.cwiseMax(lo).cwiseMin(face_hi) - x});
   });
   return pts;
 }
@@ -112,7 +114,14 @@ std::vector<WallPoint> block_walls(const Vec& lo, const Vec& hi, const Real dp, 
     int depth = i[0];  // 0 on the outer layer
     for (int a = 0; a < dim; ++a) depth = std::min({depth, i[a], n[a] - 1 - i[a]});
     if (depth > n_dummy) return;
-    pts.push_back({centre(lo, i, dp), depth == 0});
+    const Vec x = centre(lo, i, dp);
+    // The faces at the smallest distance (cells are exact integers, so ties are exact).
+    Vec to_surface = Vec::Zero();
+    for (int a = 0; a < dim; ++a) {
+      if (i[a] == depth) to_surface[a] = lo[a] - x[a];
+      else if (n[a] - 1 - i[a] == depth) to_surface[a] = lo[a] + n[a] * dp - x[a];
+    }
+    pts.push_back({x, depth == 0, to_surface});
   });
   return pts;
 }

@@ -40,19 +40,28 @@ std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, Real dp);
 /// std::invalid_argument when dp or radius is not positive or the axis is zero.
 std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp);
 
-/// A lattice point and whether it belongs to the wall layer (true) or a dummy layer (false).
+/// A lattice point of a wall, whether it belongs to the wall layer (true) or a dummy layer (false), and the
+/// offset from it to the nearest point of the wetted surface (the face the fluid touches; at an edge or a corner
+/// the edge or corner point). The wall particles keep the offset (particle field wall_surface_field) so that the
+/// fluid can tell a particle that has crossed the surface (docs/architecture.md, "Walls hold water").
 struct WallPoint {
   Vec x;
   bool is_wall;
+  Vec to_surface = Vec::Zero();
 };
 
+/// The particle vector field that holds, for wall and dummy particles, WallPoint::to_surface in the tank's rest
+/// frame (zero for other particles). Internal (not written to the output).
+inline constexpr const char* wall_surface_field = "_wall_surface";
+
 /// Walls of a box whose inner (wetted) rectangle is [lo, hi]: one wall layer and n_dummy dummy layers
-/// outside it, edges and corners included. With open_top the top side (the last axis: y in 2D, z in 3D)
+/// outside it, edges and corners included; to_surface points to the nearest point of [lo, hi]. With open_top the top side (the last axis: y in 2D, z in 3D)
 /// has no lid (side walls reach hi_y, resp. hi_z). Points come row by row like fill_rectangle.
 std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, Real dp, bool open_top, int n_dummy = 2);
 
 /// A solid block [lo, hi] made of wall particles: the outer layer is wall, the next n_dummy layers are
-/// dummy; deeper particles are not needed by the kernel and are left out.
+/// dummy; deeper particles are not needed by the kernel and are left out. to_surface points to the nearest
+/// face, or to the edge or corner where two or three faces are equally near.
 std::vector<WallPoint> block_walls(const Vec& lo, const Vec& hi, Real dp, int n_dummy = 2);
 
 }  // namespace mpsfsi

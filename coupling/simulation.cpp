@@ -217,11 +217,11 @@ class RunLoop {
         by_limit += fmt::format("{}\"{}\":{}", by_limit.empty() ? "" : ",", name, n);
       log_.event(fmt::format(
           "{{\"event\":\"summary\",\"steps\":{},\"t\":{:.9g},\"wall\":{:.3f},\"fluid\":{:.3f},\"solid\":{:.3f},"
-          "\"coupling\":{:.3f},\"output\":{:.3f},\"removed\":{},\"subcycles_raised_steps\":{},"
+          "\"coupling\":{:.3f},\"output\":{:.3f},\"removed\":{},\"put_back\":{},\"subcycles_raised_steps\":{},"
           "\"peak_memory_kib\":{},\"dt_min\":{:.6g},\"t_of_dt_min\":{:.9g},\"limit_of_dt_min\":\"{}\","
           "\"steps_by_limit\":{{{}}}{}}}",
           step_, t_, summary_.wall_seconds, summary_.t_fluid, summary_.t_solid, summary_.t_coupling, summary_.t_output,
-          summary_.n_removed, summary_.n_subcycles_raised, summary_.peak_memory_kib, summary_.dt_min,
+          summary_.n_removed, summary_.n_put_back, summary_.n_subcycles_raised, summary_.peak_memory_kib, summary_.dt_min,
           summary_.t_of_dt_min, summary_.limit_of_dt_min, by_limit,
           summary_.coupling_windows > 0
               ? fmt::format(",\"coupling_iterations\":{},\"coupling_iterations_max\":{},\"coupling_windows\":{},"
@@ -299,6 +299,7 @@ class RunLoop {
       }
       if (fluid_) {
         summary_.n_removed += last_fluid_.n_removed;
+        summary_.n_put_back += last_fluid_.n_put_back;
         if (last_fluid_.n_removed > 0)
           log_.note(fmt::format("step {}: {} fluid particle(s) left the domain and were removed ({} so far)", step_ + 1,
                                 last_fluid_.n_removed, summary_.n_removed));
@@ -604,9 +605,10 @@ class RunLoop {
     if (due) logged_step_ = step_;
     log_.progress(line,
                   fmt::format("{{\"event\":\"step\",\"step\":{},\"t\":{:.9g},\"dt\":{:.6g},\"limit\":\"{}\","
-                              "\"ppe_iterations\":{},\"ppe_solves\":{},\"ppe_residual\":{:.3g},\"subcycles\":{},{}"
+                              "\"ppe_iterations\":{},\"ppe_solves\":{},\"ppe_residual\":{:.3g},\"put_back\":{},\"subcycles\":{},{}"
                               "\"wall\":{:.3f}}}",
                               step_, t_, dt_, limit_, last_fluid_.iterations, last_fluid_.solves, last_fluid_.residual,
+                              last_fluid_.n_put_back,
                               summary_.last_subcycles,
                               implicit ? fmt::format("\"coupling_iterations\":{},\"coupling_residual\":{:.3g},"
                                                      "\"coupling_converged\":{},",
@@ -651,6 +653,7 @@ class RunLoop {
     w.f64(next_output_);
     w.f64(next_probe_);
     w.u64(summary_.n_removed);
+    w.u64(summary_.n_put_back);
     w.u64(summary_.n_subcycles_raised);
     w.i64(summary_.last_subcycles);
     w.f64(summary_.last_solid_dt);
@@ -737,6 +740,7 @@ class RunLoop {
       next_output_ = in.f64("the next output time");
       next_probe_ = in.f64("the next probe time");
       summary_.n_removed = in.u64("the removed count");
+      summary_.n_put_back = in.u64("the put-back count");
       summary_.n_subcycles_raised = in.u64("the raised-subcycles count");
       summary_.last_subcycles = static_cast<int>(in.i64("the subcycles"));
       summary_.last_solid_dt = in.f64("the solid time step");
@@ -928,6 +932,9 @@ std::string format_summary(const RunSummary& s) {
     text += fmt::format("\n  implicit coupling: {:.2f} iterations per step (at most {}), {} step(s) not converged",
                         static_cast<double>(s.coupling_iterations) / static_cast<double>(s.coupling_windows),
                         s.coupling_iterations_max, s.n_unconverged);
+  if (s.n_put_back > 0)
+    text += fmt::format("\n  {} time(s) a fluid particle ended a step inside a wall and was put back on its surface",
+                        s.n_put_back);
   if (s.n_removed > 0) text += fmt::format("\n  {} fluid particles left the domain and were removed", s.n_removed);
   text += "\n  series " + s.pvd_path;
   return text;

@@ -53,6 +53,7 @@ struct RunSummary {
   double t_fluid = 0, t_solid = 0, t_output = 0;
   double t_coupling = 0;        ///< interface: surface flags, eq. 50 loads (coupled runs)
   std::size_t n_removed = 0;    ///< fluid particles removed because they left the domain
+  std::size_t n_put_back = 0;   ///< fluid particles put back out of a wall, summed over the steps
   long peak_memory_kib = 0;     ///< peak resident memory of the largest process
   int n_ranks = 1;
   std::size_t owned_min = 0, owned_max = 0;  ///< owned particles of the least and most loaded rank at the end

@@ -121,6 +121,7 @@ void FluidCore::move_walls(const Real t) {
   if (!motion.moving()) return;
   const auto [theta, omega] = motion.at(t);
   wall_omega = omega;
+  wall_theta = theta;
   const auto& reference = p.vector_field(wall_reference_field);
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
@@ -273,6 +274,55 @@ void FluidCore::refresh_ghosts(const std::vector<std::string>& fields, FluidStep
   const auto t0 = Clock::now();
   dist.exchange_ghosts(p, fields);
   report.t_halo += seconds_since(t0);
+}
+
+/// A wall or dummy particle j stands for the lattice cell of side dp around it (the wall's solid region is the union
+/// of these cells); a fluid particle i inside one (|x_i - x_j| < dp/2 along each of the tank's axes) is moved along
+/// the cell's offset s_j to the wetted surface, to the plane through x_j + s_j normal to s_j. Of the cells that hold
+/// it the one it is deepest in is taken (then the lowest global id), so that the result does not depend on the
+/// order of the neighbours (on the number of ranks). A particle in a corner cell may land in a neighbouring cell:
+/// up to `passes` cells are handled in turn.
+std::size_t FluidCore::keep_out_of_walls() {
+  if (!p.has_vector_field(wall_surface_field)) return 0;
+  constexpr int passes = 3;
+  const auto& to_surface = p.vector_field(wall_surface_field);
+  const bool moving = motion.moving();
+  const Mat rotation = moving ? motion.matrix(wall_theta) : Mat::Identity();
+  const Real half = 0.5 * dp, reach2 = dim * half * half;
+  std::size_t n_put_back = 0;
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (roles[i] != Role::fluid) continue;
+    int pass = 0;
+    for (; pass < passes; ++pass) {
+      std::size_t deepest = p.size();
+      Real depth = 0;
+      Vec normal = Vec::Zero();
+      for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+        const auto j = static_cast<std::size_t>(near.index[k]);
+        if (p.kind[j] != ParticleKind::wall && p.kind[j] != ParticleKind::dummy) continue;
+        const Vec d = p.position[i] - p.position[j];
+        if (d.squaredNorm() >= reach2 || to_surface[j].isZero()) continue;
+        const Vec d_rest = moving ? Vec(rotation.transpose() * d) : d;
+        if (d_rest.cwiseAbs().maxCoeff() >= half) continue;
+        const Vec s = moving ? Vec(rotation * to_surface[j]) : to_surface[j];
+        const Vec n = s.normalized();  // towards the fluid
+        const Real depth_j = (s - d).dot(n);
+        if (depth_j <= 0) continue;
+        if (deepest == p.size() || depth_j > depth ||
+            (depth_j == depth && p.global_id[j] < p.global_id[deepest])) {
+          deepest = j;
+          depth = depth_j;
+          normal = n;
+        }
+      }
+      if (deepest == p.size()) break;
+      p.position[i] += depth * normal;
+      const Real approach = (p.velocity[i] - p.velocity[deepest]).dot(normal);
+      if (approach < 0) p.velocity[i] -= (1 + opt.restitution) * approach * normal;
+    }
+    n_put_back += pass > 0;
+  }
+  return n_put_back;
 }
 
 /// Fluid particles outside the case's domain are removed (with the ghosts, which are then renewed at the

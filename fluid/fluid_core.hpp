@@ -5,6 +5,7 @@
 #pragma once
 
 #include "core/distribution.hpp"
+#include "core/geometry.hpp"
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "core/particles.hpp"
@@ -66,6 +67,11 @@ struct FluidCore {
   PressureSolveResult solve_pressure(const SurfaceValue& surface_value);
   /// Refreshes these fields at the ghosts from their owners.
   void refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report);
+  /// Walls hold water: a fluid particle that ends the step inside the lattice cell of a wall or dummy particle
+  /// goes back onto that wall's wetted surface (the particle's wall_surface_field offset), and its velocity
+  /// towards the wall, relative to the wall, is reflected with the collision model's restitution. Returns
+  /// the particles put back. Off when the particles have no wall_surface_field (docs/architecture.md).
+  std::size_t keep_out_of_walls();
   /// Fluid particles outside the case's domain are removed (with the ghosts, renewed at the next step).
   std::size_t remove_escaped();
 
@@ -85,6 +91,7 @@ struct FluidCore {
   Real rho = 1000, nu = 0, c = 20, kappa = 1;
   Real lateral_friction = 0;  ///< k [1/s] of fluid.lateral_walls (0: off)
   Real wall_omega = 0;        ///< the tank's angular velocity at the end of the current step
+  Real wall_theta = 0;        ///< the tank's angle at the end of the current step
   Real tolerance = 1e-8;
   Real coarse_cell = 0;        ///< side of the pressure solve's coarse groups (0: none)
   Real density_tolerance = 0;  ///< fluid.density_tolerance: absolute stop, RMS of r dt^2 / rho

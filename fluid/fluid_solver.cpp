@@ -203,17 +203,20 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   t0 = Clock::now();
   m.scheme->correct(dt);
   const auto& surface = m.p.scalar_field(fluid_fields::free_surface);
-  // Sums over the ranks: surface particles, rows, removed particles; the largest fluid speed.
-  unsigned long long counts[3] = {0, m.particle_of_row.size(), 0};
+  // Sums over the ranks: surface particles, rows, removed particles, particles put back out of a wall; the
+  // largest fluid speed.
+  unsigned long long counts[4] = {0, m.particle_of_row.size(), 0, 0};
   for (std::size_t i = 0; i < m.p.n_owned(); ++i) counts[0] += surface[i] != 0;
+  counts[3] = m.keep_out_of_walls();
   counts[2] = m.remove_escaped();
   for (std::size_t i = 0; i < m.p.n_owned(); ++i)
     if (m.p.kind[i] == ParticleKind::fluid) report.max_speed = std::max(report.max_speed, m.p.velocity[i].norm());
-  MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_UNSIGNED_LONG_LONG, MPI_SUM, m.comm);
+  MPI_Allreduce(MPI_IN_PLACE, counts, 4, MPI_UNSIGNED_LONG_LONG, MPI_SUM, m.comm);
   MPI_Allreduce(MPI_IN_PLACE, &report.max_speed, 1, MPI_DOUBLE, MPI_MAX, m.comm);
   report.n_surface = counts[0];
   report.n_rows = counts[1];
   report.n_removed = counts[2];
+  report.n_put_back = counts[3];
   ++m.n_steps;
   const double total = seconds_since(t_begin);
   report.t_rest = total - report.t_neighbours - report.t_assembly - report.t_setup - report.t_solve - report.t_halo;

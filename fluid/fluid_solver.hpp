@@ -29,6 +29,7 @@ struct FluidStepReport {
   Real max_speed = 0;          ///< largest fluid particle speed after the step [m/s]
   std::size_t n_rows = 0;      ///< rows of the pressure system (fluid + wall particles)
   std::size_t n_removed = 0;   ///< fluid particles removed this step because they left the domain
+  std::size_t n_put_back = 0;  ///< fluid particles put back out of a wall this step (FluidCore::keep_out_of_walls)
   // Wall time of the phases [s].
   double t_neighbours = 0, t_assembly = 0, t_setup = 0, t_solve = 0, t_rest = 0;
   double t_halo = 0;  ///< owners, ghosts and their refreshes (core/distribution.hpp)

@@ -91,8 +91,10 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   count.name = w.name;
   count.kind = "wall";
   count.n_particles = points.size();
+  p.add_vector_field(wall_surface_field);
   for (const auto& pt : points) {
-    p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
+    const auto i = p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
+    p.vector_field(wall_surface_field)[static_cast<std::size_t>(i)] = pt.to_surface;
     (pt.is_wall ? count.n_wall : count.n_dummy) += 1;
   }
   scene.counts.push_back(count);

@@ -164,3 +164,66 @@ TEST(Geometry, CylinderAlongZAndOblique) {
   EXPECT_THROW(fill_cylinder(Vec::Zero(), axis, 0, dp), std::invalid_argument);
 }
 #endif
+
+namespace {
+/// The wall point at x (within 1e-9 dp); fails the test when there is none.
+WallPoint point_at(const std::vector<WallPoint>& points, const Vec& x, const Real dp) {
+  for (const auto& p : points)
+    if ((p.x - x).norm() < 1e-9 * dp) return p;
+  ADD_FAILURE() << "no wall point at " << x.transpose();
+  return {x, false, Vec::Zero()};
+}
+}  // namespace
+
+// Every wall point knows the way to the wetted surface: the offset ends on the box's inner faces (the lattice's:
+// a side that is not a whole number of dp is rounded), across a face along its normal, at an edge or a corner
+// on the edge or corner point.
+TEST(Geometry, BoxWallPointsPointToTheInnerFaces) {
+  const Real dp = 0.01;
+  const Vec lo = Vec::Zero(), hi = Vec::Constant(10.4 * dp);  // 10 cells per side: the faces at 0 and 10 dp
+  const auto w = box_walls(lo, hi, dp, false);
+  const Vec face_hi = Vec::Constant(10 * dp);
+  for (const auto& p : w) {
+    const Vec q = p.x + p.to_surface;
+    EXPECT_TRUE((q.array() >= -1e-12).all() && (q.array() <= face_hi.array() + 1e-12).all()) << p.x.transpose();
+    const Real to_face = std::min(q.minCoeff(), (face_hi - q).minCoeff());
+    EXPECT_NEAR(to_face, 0.0, 1e-12) << p.x.transpose();
+    EXPECT_GE(p.to_surface.norm(), 0.5 * dp - 1e-12);
+    EXPECT_EQ(p.is_wall, p.to_surface.cwiseAbs().maxCoeff() < dp) << p.x.transpose();
+  }
+  const Vec middle = Vec::Constant(5.5 * dp);
+  Vec left = middle, floor3 = middle, corner = Vec::Constant(-0.5 * dp), right = middle;
+  left[0] = -0.5 * dp;
+  right[0] = 10.5 * dp;
+  floor3[dim - 1] = -2.5 * dp;
+  Vec expected = Vec::Zero();
+  expected[0] = 0.5 * dp;
+  EXPECT_LT((point_at(w, left, dp).to_surface - expected).norm(), 1e-12);
+  EXPECT_LT((point_at(w, right, dp).to_surface + expected).norm(), 1e-12);
+  expected = Vec::Zero();
+  expected[dim - 1] = 2.5 * dp;
+  EXPECT_LT((point_at(w, floor3, dp).to_surface - expected).norm(), 1e-12);
+  EXPECT_LT((point_at(w, corner, dp).to_surface - Vec::Constant(0.5 * dp)).norm(), 1e-12);
+}
+
+// A block's points point out of it: to the nearest face, and where faces are equally near (the block's edges and
+// corners, and the diagonals of the deeper layers) to the edge or corner point.
+TEST(Geometry, BlockWallPointsPointOutOfTheBlock) {
+  const Real dp = 0.01;
+  const auto b = block_walls(Vec::Zero(), Vec::Constant(10 * dp), dp);
+  for (const auto& p : b) {
+    const Vec q = p.x + p.to_surface;
+    const Real to_face = std::min(q.minCoeff(), (Vec::Constant(10 * dp) - q).minCoeff());
+    EXPECT_NEAR(to_face, 0.0, 1e-12) << p.x.transpose();
+  }
+  Vec top = Vec::Constant(4.5 * dp), below_top = top;
+  top[dim - 1] = 9.5 * dp;
+  below_top[dim - 1] = 8.5 * dp;
+  Vec expected = Vec::Zero();
+  expected[dim - 1] = 0.5 * dp;
+  EXPECT_LT((point_at(b, top, dp).to_surface - expected).norm(), 1e-12);
+  expected[dim - 1] = 1.5 * dp;
+  EXPECT_LT((point_at(b, below_top, dp).to_surface - expected).norm(), 1e-12);
+  EXPECT_LT((point_at(b, Vec::Constant(0.5 * dp), dp).to_surface - Vec::Constant(-0.5 * dp)).norm(), 1e-12);
+  EXPECT_LT((point_at(b, Vec::Constant(1.5 * dp), dp).to_surface - Vec::Constant(-1.5 * dp)).norm(), 1e-12);
+}

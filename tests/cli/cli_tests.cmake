@@ -55,11 +55,11 @@ set_tests_properties(cli_mpi_memory_refused_on_every_rank PROPERTIES LABELS mpi)
 # Failure handling (issue 7): each kind is provoked and must give its diagnosis and a non-zero exit.
 set(db ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml)
 set(run_dir ${CMAKE_CURRENT_BINARY_DIR}/cli_runs)
-# A runaway: a fixed dt ten times the CFL limit's and a sound speed of 2 m/s, every particle kept however far it
-# is flung (max_loss 1); the water passes c at step 17.
+# A runaway: a fixed dt ten times the CFL limit's and a sound speed of 1 m/s, every particle kept however far it
+# is flung (max_loss 1); the water passes c at step 10.
 mpsfsi_cli_test(fail_runaway 3 "moves at .* m/s, faster than the fluid's sound speed.*last good frame"
   run ${db} --quiet --overwrite --output ${run_dir}/runaway --end-time 0.2 --set time.cfl=~ --set time.dt_max=~ --set time.dt=0.01
-  --set fluid.max_loss=1 --set materials.water.c=2)
+  --set fluid.max_loss=1 --set materials.water.c=1)
 mpsfsi_cli_test(fail_ppe_not_converged 3 "pressure solve did not converge: 2 iterations.*last good frame"
   run ${db} --quiet --overwrite --output ${run_dir}/ppe --end-time 0.01 --set fluid.max_iterations=2)
 # Water flung up out of the domain: removed and counted while at most fluid.max_loss of the body is gone, then
