@@ -210,6 +210,11 @@ void broadcast(std::string& s, MPI_Comm comm) {
 
 std::string checkpoint_file_name(const Real t) { return fmt::format("checkpoint_{:.9g}.chk", t); }
 
+bool is_later_checkpoint(const std::string& name, const Real t) {
+  const auto other = checkpoint_time_of(name);
+  return other && *other > *checkpoint_time_of(checkpoint_file_name(t));
+}
+
 void write_checkpoint(const std::string& path, const CheckpointInfo& info, const std::string& payload) {
   BinaryWriter header;
   write_info(header, info);
@@ -280,9 +285,8 @@ static std::vector<std::string> remove_later_outputs(const std::string& dir, con
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
     std::smatch m;
-    const auto t = checkpoint_time_of(name);
     const bool later = std::regex_match(name, m, frame) ? std::stoull(m[1].str()) >= info.next_frame
-                                                        : t && *t > info.time * (1 + 1e-12);
+                                                        : is_later_checkpoint(name, info.time);
     if (!later || !entry.is_regular_file(ec)) continue;
     fs::remove(entry.path(), ec);
     if (ec) throw std::runtime_error(fmt::format("cannot remove '{}': {}", entry.path().string(), ec.message()));

@@ -74,6 +74,10 @@ Checkpoint read_checkpoint(const std::string& path, MPI_Comm comm);
 /// File name of the checkpoint at time t: checkpoint_<t to 9 significant digits>.chk.
 std::string checkpoint_file_name(Real t);
 
+/// True when `name` is a checkpoint file name (checkpoint_file_name) of a time after t. Compares the names'
+/// rounded times: the checkpoint of t itself, whose name may round t up, is not later.
+bool is_later_checkpoint(const std::string& name, Real t);
+
 /// Marks of those of `files` that exist in `dir` (size and hash of their whole content now).
 std::vector<OutputMark> mark_outputs(const std::string& dir, const std::vector<std::string>& files);
 

@@ -244,3 +244,14 @@ TEST(CheckpointFile, RoundTripAndRefusals) {
 }
 
 }  // namespace
+
+// A restart removes the checkpoints after its own (a branch), never its own: the name rounds the time to 9
+// digits, here up (0.1002211466 -> 0.100221147), and the name of the time itself is not later.
+TEST(CheckpointFile, ItsOwnNameIsNotLaterThanItsTime) {
+  const Real t = 0.1002211466;
+  EXPECT_EQ(checkpoint_file_name(t), "checkpoint_0.100221147.chk");
+  EXPECT_FALSE(is_later_checkpoint(checkpoint_file_name(t), t));
+  EXPECT_FALSE(is_later_checkpoint(checkpoint_file_name(t - 1e-6), t));
+  EXPECT_TRUE(is_later_checkpoint(checkpoint_file_name(t + 1e-8), t));
+  EXPECT_FALSE(is_later_checkpoint("particles_000001.vtu", t));
+}
