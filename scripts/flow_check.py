@@ -1,9 +1,8 @@
 #!/usr/bin/python3
 """The health of a fluid run, frame by frame (.vtu or .pvtu frames): the largest fluid speed and where it is,
-the 99.9th percentile and the largest fluid pressure, the fluid particles outside the tank's inner faces
-(inside a wall or below the floor of a `box` wall of the resolved case, with a margin of 1e-9 m; "-" for a
-case without one or with tank_motion) and the
-fluid particle count. With bounds it is a check: it exits 1 naming the first frame and quantity that breaks one.
+the 99.9th percentile and the largest fluid pressure, the fluid particles inside a wall (in a `box` wall or
+a `block` of the resolved case, its faces on the lattice, with a margin of 1e-9 m; "-" for a case without walls
+or with tank_motion) and the fluid particle count. With bounds it is a check: it exits 1 naming the first frame and quantity that breaks one.
 
 Usage
   scripts/flow_check.py out/db                                   # a table, every frame
@@ -11,7 +10,7 @@ Usage
   scripts/flow_check.py out/db --until 0.15 --max-speed 3.4      # the frames with t <= 0.15 s only
 
 --min-pressure-at X,Y,P: the pressure of the fluid particle nearest (X, Y) is at least P [Pa]. Every frame is
-checked for particles outside the tank unless --allow-outside.
+checked for particles inside a wall unless --allow-outside.
 """
 import argparse
 import os
@@ -26,37 +25,52 @@ PROG = "flow_check.py"
 FLUID = 0  # ParticleKind::fluid in the `kind` field
 
 
+WALL_LAYERS = 3  # a wall's layer and its two dummy layers (core/geometry.hpp: box_walls, block_walls)
+
+
 def tank_boxes(case):
-    """The inner faces of the case's box walls: (lo, hi, open_top) per box; None for a moving tank (its walls
-    are not where the case puts them), whose particles are then not checked."""
+    """The walls of the case as (lo, hi, kind, open_top): kind "box" with its inner faces, "block" with its outer
+    ones; None for a moving tank (its walls are not where the case puts them), whose particles are then not
+    checked. The faces are the lattice's, as the program builds them (core/geometry.cpp): hi = lo + n dp with
+    n = round((hi - lo) / dp), at least 1."""
     if case.get("tank_motion"):
         return None
+    dp = float(case["dp"])
     boxes = []
     for w in case.get("walls", []) or []:
-        if w.get("type") == "box":
-            r = w["rectangle"]
-            boxes.append((np.array(r["min"], float), np.array(r["max"], float), bool(w.get("open_top", False))))
+        r = w["rectangle"]
+        lo, hi = np.array(r["min"], float), np.array(r["max"], float)
+        cells = np.maximum(1, np.floor((hi - lo) / dp + 0.5))  # std::round: halves away from zero
+        boxes.append((lo, lo + cells * dp, w.get("type", "box"), bool(w.get("open_top", False)), dp))
     return boxes
 
 
 def outside(x, boxes):
-    """How many points lie outside every box's inner faces (above an open top counts as inside); None without boxes."""
+    """How many points lie inside a wall: in a box wall (between the inner faces and the outer faces of its
+    dummy layers, below the top of the walls when the top is open) or in a block. Spray that leaves the tank over
+    the top of its walls has crossed no wall and is not counted. None without walls."""
     if not boxes:
         return None
-    inside = np.zeros(len(x), bool)
-    for lo, hi, open_top in boxes:
-        ok = np.ones(len(x), bool)
-        for a in range(len(lo)):
-            ok &= x[:, a] >= lo[a] - 1e-9
-            if not (open_top and a == len(lo) - 1):
-                ok &= x[:, a] <= hi[a] + 1e-9
-        inside |= ok
-    return int((~inside).sum())
+    in_wall = np.zeros(len(x), bool)
+    eps = 1e-9
+    for lo, hi, kind, open_top, dp in boxes:
+        x = x[:, :len(lo)]  # 2D frames have z = 0
+        if kind == "block":
+            in_wall |= np.all((x > lo + eps) & (x < hi - eps), axis=1)
+            continue
+        top = len(lo) - 1
+        shell_hi, inner_hi = hi + WALL_LAYERS * dp, hi + eps
+        if open_top:
+            shell_hi[top], inner_hi[top] = hi[top], np.inf
+        in_shell = np.all((x > lo - WALL_LAYERS * dp) & (x < shell_hi), axis=1)
+        in_inner = np.all((x >= lo - eps) & (x <= inner_hi), axis=1)
+        in_wall |= in_shell & ~in_inner
+    return int(in_wall.sum())
 
 
 def frame_health(x, fields, boxes):
     """One frame's figures: fluid count, largest fluid speed and its position, 99.9th percentile and largest
-    fluid pressure, fluid particles outside the boxes' inner faces."""
+    fluid pressure, fluid particles inside a wall."""
     fluid = fields["kind"] == FLUID
     if not fluid.any():
         return {"n": 0, "speed": 0.0, "at": (0.0, 0.0), "p999": 0.0, "pmax": 0.0, "outside": outside(x[fluid], boxes)}
@@ -75,7 +89,7 @@ def main():
     ap.add_argument("--max-speed", type=float, default=None, help="bound on the largest fluid speed [m/s]")
     ap.add_argument("--max-p999", type=float, default=None, help="bound on the 99.9th percentile fluid pressure [Pa]")
     ap.add_argument("--min-pressure-at", default=None, help="X,Y,P: the fluid particle nearest (X, Y) has p >= P [Pa]")
-    ap.add_argument("--allow-outside", action="store_true", help="do not fail on particles outside the tank")
+    ap.add_argument("--allow-outside", action="store_true", help="do not fail on particles inside a wall")
     args = ap.parse_args()
 
     files = frame_files(args.run, PROG)
@@ -93,7 +107,7 @@ def main():
         except (ValueError, AssertionError):
             sys.exit(f"{PROG}: --min-pressure-at '{args.min_pressure_at}': expected X,Y,P (or X,Y,Z,P in 3D)")
     failures = []
-    print("frame, t [s], fluid particles, max speed [m/s], x, y of max, p99.9 [Pa], p max [Pa], outside the tank")
+    print("frame, t [s], fluid particles, max speed [m/s], x, y of max, p99.9 [Pa], p max [Pa], inside a wall")
     for f in files:
         x, fields = read_frame(f)
         h = frame_health(x, fields, boxes)
@@ -105,7 +119,7 @@ def main():
         if args.max_p999 is not None and h["p999"] > args.max_p999:
             failures.append(f"{name}: 99.9th percentile pressure {h['p999']:.4g} Pa > {args.max_p999}")
         if h["outside"] and not args.allow_outside:
-            failures.append(f"{name}: {h['outside']} fluid particle(s) outside the tank's inner faces")
+            failures.append(f"{name}: {h['outside']} fluid particle(s) inside a wall")
         if probe is not None and h["n"]:
             fluid = fields["kind"] == FLUID
             d = len(probe) - 1

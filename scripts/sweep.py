@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """Runs one case at a list of particle spacings and tabulates, per dp, what a resolution study needs: the exit
 code, steps and wall time, the smallest dt and the limit that set it (run.jsonl's summary), the fluid particles
-removed, and from the frames (scripts/flow_check.py's figures) the largest fluid speed and 99.9th percentile
-pressure up to --until and the most fluid particles ever outside the tank. --measure adds a column per command:
+removed and put back out of a wall, and from the frames (scripts/flow_check.py's figures) the largest fluid speed and 99.9th percentile
+pressure up to --until and the most fluid particles ever inside a wall. --measure adds a column per command:
 the last line of its output, with {run} replaced by the run's folder (e.g. an analyse.py of the case).
 
 Usage
@@ -50,7 +50,7 @@ def summary_of(run):
 
 
 def frames_of(run, until):
-    """Largest speed and 99.9th percentile pressure over the frames at t <= until, most particles outside ever."""
+    """Largest speed and 99.9th percentile pressure over the frames at t <= until, most particles ever inside a wall."""
     files = frame_files(run, PROG)
     times = frame_times(run, files)
     boxes = tank_boxes(read_case(run, PROG))
@@ -90,7 +90,7 @@ def main():
         sys.exit(f"{PROG}: --ranks {args.ranks}: expected at least 1")
     os.makedirs(args.out, exist_ok=True)
     head = ["dp [m]", "exit", "steps", "wall [s]", "smallest dt [s]", "its limit", "at t [s]", "removed",
-            "max speed [m/s]", "p99.9 max [Pa]", "outside max"] + [f"measure {i + 1}" for i in range(len(args.measure))]
+            "put back", "max speed [m/s]", "p99.9 max [Pa]", "in a wall max"] + [f"measure {i + 1}" for i in range(len(args.measure))]
     rows = []
     for dp in dps:
         run = os.path.join(args.out, f"dp_{dp:g}")
@@ -105,7 +105,7 @@ def main():
         speed, p999, out = frames_of(run, args.until) if os.path.isdir(run) else (float("nan"),) * 3
         row = [f"{dp:g}", code, s.get("steps", "-"), f"{wall:.0f}", f"{s['dt_min']:.3g}" if "dt_min" in s else "-",
                s.get("limit_of_dt_min", "-"), f"{s['t_of_dt_min']:.4g}" if "t_of_dt_min" in s else "-",
-               s.get("removed", "-"), f"{speed:.4g}", f"{p999:.4g}", "-" if out is None else out]
+               s.get("removed", "-"), s.get("put_back", "-"), f"{speed:.4g}", f"{p999:.4g}", "-" if out is None else out]
         for m in args.measure:
             r = subprocess.run(m.replace("{run}", shlex.quote(run)), shell=True, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True, cwd=ROOT)
