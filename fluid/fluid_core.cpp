@@ -10,6 +10,7 @@
 #include "core/stopwatch.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <stdexcept>
 
@@ -276,6 +277,18 @@ void FluidCore::refresh_ghosts(const std::vector<std::string>& fields, FluidStep
   report.t_halo += seconds_since(t0);
 }
 
+namespace {
+
+/// The wall cell a point is deepest in: the wall or dummy particle, the depth behind its surface plane and the
+/// plane's normal (towards the fluid); particle == none when the point is in no cell.
+struct WallCell {
+  std::size_t particle;
+  Real depth = 0;
+  Vec normal = Vec::Zero();
+};
+
+}  // namespace
+
 /// A wall or dummy particle j stands for the lattice cell of side dp around it (the wall's solid region is the union
 /// of these cells); a fluid particle i inside one (|x_i - x_j| < dp/2 along each of the tank's axes) is moved along
 /// the cell's offset s_j to the wetted surface, to the plane through x_j + s_j normal to s_j. Of the cells that hold
@@ -289,36 +302,34 @@ std::size_t FluidCore::keep_out_of_walls() {
   const bool moving = motion.moving();
   const Mat rotation = moving ? motion.matrix(wall_theta) : Mat::Identity();
   const Real half = 0.5 * dp, reach2 = dim * half * half;
+  const std::size_t none = p.size();
+  const auto deepest_cell = [&](const std::size_t i) {
+    WallCell cell{none};
+    for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
+      const auto j = static_cast<std::size_t>(near.index[k]);
+      if (p.kind[j] != ParticleKind::wall && p.kind[j] != ParticleKind::dummy) continue;
+      const Vec d = p.position[i] - p.position[j];
+      if (d.squaredNorm() >= reach2) continue;
+      if ((moving ? Vec(rotation.transpose() * d) : d).cwiseAbs().maxCoeff() >= half) continue;
+      assert(!to_surface[j].isZero() && "every wall and dummy particle has its offset to the surface");
+      const Vec s = moving ? Vec(rotation * to_surface[j]) : to_surface[j];
+      const Vec n = s.normalized();
+      const Real depth = (s - d).dot(n);
+      if (depth <= 0) continue;
+      if (cell.particle == none || depth > cell.depth ||
+          (depth == cell.depth && p.global_id[j] < p.global_id[cell.particle]))
+        cell = {j, depth, n};
+    }
+    return cell;
+  };
   std::size_t n_put_back = 0;
   for (std::size_t i = 0; i < p.n_owned(); ++i) {
     if (roles[i] != Role::fluid) continue;
     int pass = 0;
-    for (; pass < passes; ++pass) {
-      std::size_t deepest = p.size();
-      Real depth = 0;
-      Vec normal = Vec::Zero();
-      for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
-        const auto j = static_cast<std::size_t>(near.index[k]);
-        if (p.kind[j] != ParticleKind::wall && p.kind[j] != ParticleKind::dummy) continue;
-        const Vec d = p.position[i] - p.position[j];
-        if (d.squaredNorm() >= reach2 || to_surface[j].isZero()) continue;
-        const Vec d_rest = moving ? Vec(rotation.transpose() * d) : d;
-        if (d_rest.cwiseAbs().maxCoeff() >= half) continue;
-        const Vec s = moving ? Vec(rotation * to_surface[j]) : to_surface[j];
-        const Vec n = s.normalized();  // towards the fluid
-        const Real depth_j = (s - d).dot(n);
-        if (depth_j <= 0) continue;
-        if (deepest == p.size() || depth_j > depth ||
-            (depth_j == depth && p.global_id[j] < p.global_id[deepest])) {
-          deepest = j;
-          depth = depth_j;
-          normal = n;
-        }
-      }
-      if (deepest == p.size()) break;
-      p.position[i] += depth * normal;
-      const Real approach = (p.velocity[i] - p.velocity[deepest]).dot(normal);
-      if (approach < 0) p.velocity[i] -= (1 + opt.restitution) * approach * normal;
+    for (WallCell cell = deepest_cell(i); cell.particle != none && pass < passes; cell = deepest_cell(i), ++pass) {
+      p.position[i] += cell.depth * cell.normal;
+      const Real approach = (p.velocity[i] - p.velocity[cell.particle]).dot(cell.normal);
+      if (approach < 0) p.velocity[i] -= (1 + opt.restitution) * approach * cell.normal;
     }
     n_put_back += pass > 0;
   }

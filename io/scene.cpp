@@ -91,12 +91,13 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   count.name = w.name;
   count.kind = "wall";
   count.n_particles = points.size();
-  p.add_vector_field(wall_surface_field);
+  const std::size_t first = p.size();
   for (const auto& pt : points) {
-    const auto i = p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
-    p.vector_field(wall_surface_field)[static_cast<std::size_t>(i)] = pt.to_surface;
+    p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
     (pt.is_wall ? count.n_wall : count.n_dummy) += 1;
   }
+  auto& to_surface = p.add_vector_field(wall_surface_field);
+  for (std::size_t k = 0; k < points.size(); ++k) to_surface[first + k] = points[k].to_surface;
   scene.counts.push_back(count);
 }
 

@@ -53,8 +53,8 @@ def outside(x, boxes):
         return None
     in_wall = np.zeros(len(x), bool)
     eps = 1e-9
+    x = x[:, :len(boxes[0][0])]  # 2D frames have z = 0
     for lo, hi, kind, open_top, dp in boxes:
-        x = x[:, :len(lo)]  # 2D frames have z = 0
         if kind == "block":
             in_wall |= np.all((x > lo + eps) & (x < hi - eps), axis=1)
             continue
