@@ -175,13 +175,12 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_setup = res.t_setup;
   report.t_solve = res.t_solve;
   report.iterations = res.iterations;
-  // The projection's active set: re-solved while rows change (at most max_solves solves).
+  // The projection's active set: re-solved while rows change (at most max_solves solves), on the same rows.
   for (int solves = 1; solves < m.scheme->max_solves(); ++solves) {
     m.refresh_ghosts({fluid_fields::pressure}, report);
     if (!m.scheme->update_rows(solves)) break;
     m.refresh_ghosts({fluid_fields::free_surface}, report);
     t0 = Clock::now();
-    m.number_rows(dt);
     m.scheme->assemble(dt);
     report.t_assembly += seconds_since(t0);
     res = m.solve_pressure(surface_value);

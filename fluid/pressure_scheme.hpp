@@ -28,7 +28,8 @@ class PressureScheme {
   virtual void after_surface() {}
   /// After the flags are current at the ghosts, before the first assembly.
   virtual void prepare(Real /*dt*/) {}
-  /// The rows of FluidCore::sys and their right-hand side, after FluidCore::number_rows.
+  /// The rows of FluidCore::sys and their right-hand side, after FluidCore::number_rows; called again after
+  /// update_rows changed rows (the same rows, numbered once per step).
   virtual void assemble(Real dt) = 0;
   /// The pressure a free-surface row holds.
   virtual Real surface_value(std::size_t /*i*/) const { return 0; }

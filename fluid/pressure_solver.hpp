@@ -66,6 +66,12 @@ struct LocalRows {
   /// The solve may also stop when ||b - Ax||_2 (over all ranks) is at most this, whatever the relative
   /// tolerance says (0: off). The fluid sets it from fluid.density_tolerance.
   Real absolute_tolerance = 0;
+  /// Set by a caller that re-solves with a few rows changed (the projection's active set): the rows, their
+  /// columns (pattern), maps and groups are those of the last solve on every rank, and only the rows in
+  /// `changed_rows` have new values and right-hand sides. A solver may then update its setup row by row;
+  /// it may also ignore the hint and set up anew.
+  bool values_only = false;
+  std::vector<LocalIndex> changed_rows;
 
   std::size_t n_rows() const { return row_id.size(); }
 };

@@ -178,11 +178,12 @@ struct CoarseLevel {
     az.ptr.reserve(n + 1);
   }
 
-  /// Appends the next row of A Z: its entries (col, value) summed by the group of their column.
-  void add_row(const LocalIndex* col, const Scalar* value, const std::size_t n_entries) {
-    constexpr int max_groups = 64;
-    int row_l[max_groups];
-    Scalar row_v[max_groups];
+  static constexpr int max_groups = 64;  ///< coarse groups one row may meet
+
+  /// A row of A Z: the entries (col, value) summed by the group of their column, sorted by group, into
+  /// (row_l, row_v); returns their number.
+  int row_by_group(const LocalIndex* col, const Scalar* value, const std::size_t n_entries, int* row_l,
+                   Scalar* row_v) const {
     int n_l = 0, cur = -1, cur_l = -1;
     Scalar run = 0;  // the sum of the current run of one group, in a register
     for (std::size_t k = 0; k < n_entries; ++k) {
@@ -209,6 +210,14 @@ struct CoarseLevel {
         std::swap(row_l[s - 1], row_l[s]);
         std::swap(row_v[s - 1], row_v[s]);
       }
+    return n_l;
+  }
+
+  /// Appends the next row of A Z.
+  void add_row(const LocalIndex* col, const Scalar* value, const std::size_t n_entries) {
+    int row_l[max_groups];
+    Scalar row_v[max_groups];
+    const int n_l = row_by_group(col, value, n_entries, row_l, row_v);
     for (int q = 0; q < n_l; ++q) {
       az.col.push_back(row_l[q]);
       az.val.push_back(row_v[q]);
@@ -216,8 +225,21 @@ struct CoarseLevel {
     az.ptr.push_back(static_cast<int>(az.col.size()));
   }
 
-  /// E = Z^T (A Z) from this rank's rows of A Z and the other ranks', factorised. A collective.
-  void factorise() {
+  /// Row i of A Z anew from new values on the same columns (the same groups, so the same entries).
+  void set_row(const std::size_t i, const LocalIndex* col, const Scalar* value, const std::size_t n_entries) {
+    int row_l[max_groups];
+    Scalar row_v[max_groups];
+    const int n_l = row_by_group(col, value, n_entries, row_l, row_v);
+    assert(n_l == az.ptr[i + 1] - az.ptr[i]);
+    for (int q = 0; q < n_l; ++q) {
+      assert(az.col[static_cast<std::size_t>(az.ptr[i] + q)] == row_l[q]);
+      az.val[static_cast<std::size_t>(az.ptr[i] + q)] = row_v[q];
+    }
+  }
+
+  /// E = Z^T (A Z) from this rank's rows of A Z and the other ranks', factorised; with `same_pattern` (the
+  /// rows of A Z changed their values only) on the ordering of the last factorisation. A collective.
+  void factorise(const bool same_pattern = false) {
     const std::size_t n = of_row.size();
     std::vector<Scalar> acc(static_cast<std::size_t>(m), 0.0);
     std::vector<char> seen(static_cast<std::size_t>(m), 0);
@@ -256,7 +278,8 @@ struct CoarseLevel {
       t.emplace_back(static_cast<int>(triplets[q]), static_cast<int>(triplets[q + 1]), triplets[q + 2]);
     Eigen::SparseMatrix<Scalar> E(m, m);
     E.setFromTriplets(t.begin(), t.end());
-    e.compute(E);
+    if (!same_pattern) e.analyzePattern(E);
+    e.factorize(E);
     if (e.info() != Eigen::Success) throw std::runtime_error("pressure solve (ssor): the coarse matrix is not positive definite");
     g.assign(static_cast<std::size_t>(m), 0.0);
   }
@@ -329,31 +352,50 @@ class EisenstatSystem final : public OP {
     resize_with_headroom(lower.val, lower.col.size());
     resize_with_headroom(other.col, static_cast<std::size_t>(other.ptr[n]));
     resize_with_headroom(other.val, other.col.size());
-    diag.assign(n, 0.0);
+    diag.resize(n);
+    inv_dprime.resize(n);
+    sqrt_dprime.resize(n);
+    d_minus_2dprime.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t k0 = sys.row_ptr[i], k1 = sys.row_ptr[i + 1];
       if (coarse.m > 0) coarse.add_row(&sys.col[k0], &sys.value[k0], k1 - k0);
       const std::size_t n_lower = static_cast<std::size_t>(lower.ptr[i + 1] - lower.ptr[i]);
       const std::size_t n_other = static_cast<std::size_t>(other.ptr[i + 1] - other.ptr[i]);
       std::copy_n(&sys.col[k0], n_lower, &lower.col[static_cast<std::size_t>(lower.ptr[i])]);
-      std::copy_n(&sys.value[k0], n_lower, &lower.val[static_cast<std::size_t>(lower.ptr[i])]);
       std::copy_n(&sys.col[k1 - n_other], n_other, &other.col[static_cast<std::size_t>(other.ptr[i])]);
-      std::copy_n(&sys.value[k1 - n_other], n_other, &other.val[static_cast<std::size_t>(other.ptr[i])]);
-      for (std::size_t k = diag_at[i]; k < k1 && sys.col[k] == static_cast<LocalIndex>(i); ++k) diag[i] += sys.value[k];
-      if (!(diag[i] > 0))
-        throw std::runtime_error("pressure solve (sgs): the row of global id " + std::to_string(sys.row_id[i]) +
-                                 " has no positive diagonal");
-    }
-    inv_dprime.resize(n);
-    sqrt_dprime.resize(n);
-    d_minus_2dprime.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Scalar dprime = diag[i] / omega;
-      inv_dprime[i] = 1.0 / dprime;
-      sqrt_dprime[i] = std::sqrt(dprime);
-      d_minus_2dprime[i] = diag[i] - 2 * dprime;
+      set_row_values(sys, i, omega);
     }
     if (coarse.m > 0) coarse.factorise();
+  }
+
+  /// After set_rows on a system with the same rows and columns: the values of `rows` from `sys` (the
+  /// relaxation's and the coarse level's; the coarse matrix is factorised anew). A collective.
+  void update_rows(const LocalRows& sys, const std::vector<LocalIndex>& rows, const Scalar omega) {
+    for (const LocalIndex r : rows) {
+      const auto i = static_cast<std::size_t>(r);
+      const std::size_t k0 = sys.row_ptr[i], k1 = sys.row_ptr[i + 1];
+      if (coarse.m > 0) coarse.set_row(i, &sys.col[k0], &sys.value[k0], k1 - k0);
+      set_row_values(sys, i, omega);
+    }
+    if (coarse.m > 0) coarse.factorise(true);
+  }
+
+  /// Row i's values in L, O and D, and its relaxation. Throws if it has no positive diagonal.
+  void set_row_values(const LocalRows& sys, const std::size_t i, const Scalar omega) {
+    const std::size_t k0 = sys.row_ptr[i], k1 = sys.row_ptr[i + 1];
+    const std::size_t n_lower = static_cast<std::size_t>(lower.ptr[i + 1] - lower.ptr[i]);
+    const std::size_t n_other = static_cast<std::size_t>(other.ptr[i + 1] - other.ptr[i]);
+    std::copy_n(&sys.value[k0], n_lower, &lower.val[static_cast<std::size_t>(lower.ptr[i])]);
+    std::copy_n(&sys.value[k1 - n_other], n_other, &other.val[static_cast<std::size_t>(other.ptr[i])]);
+    diag[i] = 0;
+    for (std::size_t k = diag_pos_[i]; k < k1 && sys.col[k] == static_cast<LocalIndex>(i); ++k) diag[i] += sys.value[k];
+    if (!(diag[i] > 0))
+      throw std::runtime_error("pressure solve (sgs): the row of global id " + std::to_string(sys.row_id[i]) +
+                               " has no positive diagonal");
+    const Scalar dprime = diag[i] / omega;
+    inv_dprime[i] = 1.0 / dprime;
+    sqrt_dprime[i] = std::sqrt(dprime);
+    d_minus_2dprime[i] = diag[i] - 2 * dprime;
   }
 
   /// acc[j] -= L_ij x_i over the entries of row i of L (the column of L^T: row j of L^T x gets L_ij x_i).
@@ -776,7 +818,14 @@ class TrilinosPressureSolver final : public PressureSolver {
       E.t_row = rcp(new MV(row_map_, 1));
       E.t_col = rcp(new MV(col_map_, 1));
     }
+    // A re-solve with a few rows changed on the rows and columns of the last setup: those rows only.
+    if (sys.values_only && eis_row_map_ == row_map_ && eis_col_map_ == col_map_ && E.size() == sys.n_rows()) {
+      E.update_rows(sys, sys.changed_rows, omega_);
+      return;
+    }
     E.set_rows(sys, omega_, raw_comm_, n_ranks_);
+    eis_row_map_ = row_map_;
+    eis_col_map_ = col_map_;
     precond_bytes_ = E.bytes();
   }
 
@@ -817,20 +866,39 @@ class TrilinosPressureSolver final : public PressureSolver {
 
   /// The Tpetra matrix of this rank's rows, from the CRS arrays (after update_maps).
   void build_matrix(const LocalRows& sys) {
-    const std::size_t n_own = sys.n_rows();
-    const std::size_t nnz = sys.col.size();
+    A_ = Teuchos::null;  // release the old arrays first
+    A_ = crs_matrix(sys, col_map_);
+    A_->expertStaticFillComplete(row_map_, row_map_, importer_);
+  }
+
+  /// A Tpetra matrix of `sys`'s rows on the row map and `columns`, without the entries off the diagonal
+  /// that hold an exact zero (a caller's padding, LocalRows::values_only): they would change the graph that
+  /// MueLu's aggregation and the incomplete factorisation see, not the operator.
+  RCP<Matrix> crs_matrix(const LocalRows& sys, const RCP<const Map>& columns) const {
     using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
     using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
     using Values = Matrix::local_matrix_device_type::values_type;
-    RowPtr ptr(Kokkos::ViewAllocateWithoutInitializing("ptr"), n_own + 1);
+    const std::size_t n = sys.n_rows();
+    const auto kept = [&](const std::size_t i, const std::size_t k) {
+      return sys.value[k] != 0 || sys.col[k] == static_cast<LocalIndex>(i);
+    };
+    std::size_t nnz = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k) nnz += kept(i, k);
+    RowPtr ptr(Kokkos::ViewAllocateWithoutInitializing("ptr"), n + 1);
     Entries ind(Kokkos::ViewAllocateWithoutInitializing("ind"), nnz);
     Values val(Kokkos::ViewAllocateWithoutInitializing("val"), nnz);
-    for (std::size_t k = 0; k <= n_own; ++k) ptr(k) = sys.row_ptr[k];
-    for (std::size_t k = 0; k < nnz; ++k) ind(k) = sys.col[k];
-    for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
-    A_ = Teuchos::null;  // release the old arrays first
-    A_ = rcp(new Matrix(row_map_, col_map_, ptr, ind, val));
-    A_->expertStaticFillComplete(row_map_, row_map_, importer_);
+    std::size_t e = 0;
+    ptr(0) = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = sys.row_ptr[i]; k < sys.row_ptr[i + 1]; ++k)
+        if (kept(i, k)) {
+          ind(e) = sys.col[k];
+          val(e++) = sys.value[k];
+        }
+      ptr(i + 1) = e;
+    }
+    return rcp(new Matrix(row_map_, columns, ptr, ind, val));
   }
 
   /// A preconditioner (muelu, ilu) kept as built between setups, which a checkpoint saves by its matrix.
@@ -840,17 +908,7 @@ class TrilinosPressureSolver final : public PressureSolver {
 
   /// The matrix of `sys` on one rank (the setup matrix a restart rebuilds a kept preconditioner from).
   RCP<Matrix> serial_matrix(const LocalRows& sys) const {
-    using RowPtr = Matrix::local_graph_device_type::row_map_type::non_const_type;
-    using Entries = Matrix::local_graph_device_type::entries_type::non_const_type;
-    using Values = Matrix::local_matrix_device_type::values_type;
-    const std::size_t n = sys.n_rows(), nnz = sys.col.size();
-    RowPtr ptr(Kokkos::ViewAllocateWithoutInitializing("ptr"), n + 1);
-    Entries ind(Kokkos::ViewAllocateWithoutInitializing("ind"), nnz);
-    Values val(Kokkos::ViewAllocateWithoutInitializing("val"), nnz);
-    for (std::size_t k = 0; k <= n; ++k) ptr(k) = sys.row_ptr[k];
-    for (std::size_t k = 0; k < nnz; ++k) ind(k) = sys.col[k];
-    for (std::size_t k = 0; k < nnz; ++k) val(k) = sys.value[k];
-    auto A = rcp(new Matrix(row_map_, row_map_, ptr, ind, val));
+    auto A = crs_matrix(sys, row_map_);
     A->expertStaticFillComplete(row_map_, row_map_);
     return A;
   }
@@ -968,6 +1026,7 @@ class TrilinosPressureSolver final : public PressureSolver {
   bool eisenstat_ = false, sgs_ifpack2_ = false;
   double omega_ = 1.0;
   RCP<EisenstatSystem> eis_;
+  RCP<const Map> eis_row_map_, eis_col_map_;  ///< the maps of the EisenstatSystem's last set_rows
   RCP<MV> bh_, y_;
   RCP<Teuchos::ParameterList> belos_list_;
   Scalar belos_tolerance_ = 0;  ///< the tolerance belos_ was last given

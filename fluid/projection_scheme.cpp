@@ -131,6 +131,7 @@ class ProjectionScheme final : public PressureScheme {
     // row k, neighbour j, gets dn_j/dx_k; by the symmetry of w, dn_k/dx_k is their sum.
     // Also the kernel's number density n_k and sum_j -w'(r_jk) r_jk (C of the particle).
     dn_pair.resize(near.n_pairs());
+    lap_weight.resize(step_alpha > 0 ? near.n_pairs() : 0);
     dn_self.resize(n);
     n_kernel.resize(n);
     n_fluid.resize(n);
@@ -144,6 +145,7 @@ class ProjectionScheme final : public PressureScheme {
         const Real r = r_jk.norm();
         const KernelValue kv = kernel_at(kernel, r, re_p);
         dn_pair[q] = (kv.dw / r) * r_jk;
+        if (step_alpha > 0) lap_weight[q] = weight(r, re_g);
         s += dn_pair[q];
         n_k += kv.w;
         if (roles[j] == Role::fluid) n_f += kv.w;
@@ -296,7 +298,7 @@ class ProjectionScheme final : public PressureScheme {
             const auto j = static_cast<std::size_t>(near.index[q]);
             const LocalIndex col = column_of(j);
             if (col < 0 || static_cast<std::size_t>(col) == r) continue;
-            const Real v = lap_scale * weight((p.position[j] - p.position[a]).norm(), re_g);
+            const Real v = lap_scale * lap_weight[q];
             add_laplacian_column(static_cast<std::size_t>(col), -v);
             add_laplacian_column(r, v);
           }
@@ -320,42 +322,83 @@ class ProjectionScheme final : public PressureScheme {
   }
 
   /// The rows of the projection: G p + p / (c^2 dt^2) = kappa rho / dt^2 (n*_i - n0) / n0 (build_gram) over the
-  /// rows and columns that are not free surface; free-surface rows p = 0.
+  /// rows and columns that are not free surface; free-surface rows p = 0. The first assembly of a step lays
+  /// out every row's entries whatever its flag (a free-surface row or column holds zeros off the diagonal),
+  /// except the dry rows', which stay free surface through the step; the active set's re-solves then write
+  /// only the rows whose flag or a column's flag changed (LocalRows::values_only).
   void assemble_projection(const Real dt) {
+    const bool layout = !gram_ready;
     if (!gram_ready) {
       build_gram(dt);
       gram_ready = true;
     }
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n_rows = particle_of_row.size();
-    sys.col.clear();
-    sys.value.clear();
     // The first step solves for the incompressible pressure (kappa 1, start_compressibility of the case's).
-    const Real compress = (initial_step() ? start_compressibility : 1.0) / (c * c * dt * dt);
-    const Real source = (initial_step() ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
-    projection_source = source;
-    const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + compress;
-    sys.row_ptr[0] = 0;
+    row_compress = (initial_step() ? start_compressibility : 1.0) / (c * c * dt * dt);
+    projection_source = (initial_step() ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
+    sys.values_only = !layout;
+    sys.changed_rows.clear();
+    if (layout) {
+      sys.col.clear();
+      sys.value.clear();
+      sys.row_ptr[0] = 0;
+      for (std::size_t r = 0; r < n_rows; ++r) {
+        const auto i = static_cast<std::size_t>(particle_of_row[r]);
+        if (dry[i]) {
+          sys.col.push_back(static_cast<LocalIndex>(r));
+        } else {
+          for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
+            if (!dry_column(static_cast<std::size_t>(gram_col[e]), n_rows)) sys.col.push_back(gram_col[e]);
+        }
+        sys.row_ptr[r + 1] = sys.col.size();
+        sys.value.resize(sys.col.size());
+        write_row(r);
+      }
+      assembled_surface.assign(surface.begin(), surface.end());
+      return;
+    }
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      if (surface[i] != 0) {
-        sys.col.push_back(static_cast<LocalIndex>(r));
-        sys.value.push_back(dirichlet_diag);
-        sys.rhs[r] = dirichlet_diag * surface_pressure[i];
-      } else {
-        sys.rhs[r] = source * row_error[r];
-        for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
-          const auto q = static_cast<std::size_t>(gram_col[e]);
-          const auto j = static_cast<std::size_t>(column_particle[q]);
-          if (surface[j] != 0) {
-            sys.rhs[r] -= gram_val[e] * surface_pressure[j];
-            continue;
-          }
-          sys.col.push_back(gram_col[e]);
-          sys.value.push_back(gram_val[e] + (q == r ? compress : 0.0));
-        }
+      if (dry[i]) continue;
+      bool changed = surface[i] != assembled_surface[i];
+      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1] && !changed; ++e) {
+        const auto j = static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])]);
+        changed = surface[j] != assembled_surface[j];
       }
-      sys.row_ptr[r + 1] = sys.col.size();
+      if (!changed) continue;
+      write_row(r);
+      sys.changed_rows.push_back(static_cast<LocalIndex>(r));
+    }
+    assembled_surface.assign(surface.begin(), surface.end());
+  }
+
+  /// Whether column q is a dry row of this rank's (free surface through the step: no entry).
+  bool dry_column(const std::size_t q, const std::size_t n_rows) const {
+    return q < n_rows && dry[static_cast<std::size_t>(column_particle[q])];
+  }
+
+  /// Row r's values and right-hand side on the entries assemble_projection laid out.
+  void write_row(const std::size_t r) {
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    const std::size_t n_rows = particle_of_row.size();
+    const auto i = static_cast<std::size_t>(particle_of_row[r]);
+    Real* value = sys.value.data() + sys.row_ptr[r];
+    if (surface[i] != 0) {
+      const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + row_compress;
+      const LocalIndex* col = sys.col.data() + sys.row_ptr[r];
+      for (std::size_t k = 0; k < sys.row_ptr[r + 1] - sys.row_ptr[r]; ++k)
+        value[k] = col[k] == static_cast<LocalIndex>(r) ? dirichlet_diag : 0.0;
+      sys.rhs[r] = dirichlet_diag * surface_pressure[i];
+      return;
+    }
+    sys.rhs[r] = projection_source * row_error[r];
+    for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
+      const auto q = static_cast<std::size_t>(gram_col[e]);
+      const auto j = static_cast<std::size_t>(column_particle[q]);
+      if (surface[j] != 0) sys.rhs[r] -= gram_val[e] * surface_pressure[j];
+      if (dry_column(q, n_rows)) continue;
+      *value++ = surface[j] != 0 ? 0.0 : gram_val[e] + (q == r ? row_compress : 0.0);
     }
   }
 
@@ -501,9 +544,11 @@ class ProjectionScheme final : public PressureScheme {
   Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
   Real projection_scale = 0;      ///< d / C of the projection (projection_geometry)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
+  Real row_compress = 0;          ///< the compressibility 1 / (c^2 dt^2) of the step's rows (assemble_projection)
 
   std::vector<Vec> dn_self;              ///< projection: dn_k/dx_k
   std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
+  std::vector<Real> lap_weight;          ///< projection: the weight w(r_jk) at re_gradient of entry q (stabilisation)
   std::vector<Real> surface_pressure;    ///< projection: the pressure of each particle as a free-surface row
   std::vector<Real> n_kernel, c_of;      ///< projection: each particle's kernel density, sum_j -w' r
   std::vector<Real> n_fluid;             ///< projection: the fluid neighbours' part of n_kernel
@@ -523,6 +568,7 @@ class ProjectionScheme final : public PressureScheme {
   std::vector<Real> gram_val;
   std::vector<LocalIndex> column_particle;  ///< projection: the particle of each column
   bool gram_ready = false;                  ///< G built for this step
+  std::vector<Real> assembled_surface;      ///< projection: the free-surface flags of the last assembly
 };
 
 }  // namespace

@@ -271,6 +271,88 @@ TEST(PressureSolve, TwoLevelSsorNeedsFewerIterations) {
   }
 }
 
+namespace {
+/// The shifted 5-point system of solve_model_problem on an m x m grid, rows in groups of 4 x 4 points,
+/// with the rows of `dirichlet` (y index) identity rows; unlike solve_model_problem's, their entries and
+/// the other rows' entries in their columns stay in the pattern with the value 0 (as the projection's
+/// active set lays out its rows).
+LocalRows padded_model_system(const int m, const std::vector<int>& dirichlet) {
+  const auto is_dirichlet = [&](const int iy) { return std::find(dirichlet.begin(), dirichlet.end(), iy) != dirichlet.end(); };
+  LocalRows whole;
+  whole.row_ptr.push_back(0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  for (int r = 0; r < m * m; ++r) {
+    whole.row_id.push_back(1000 + 3 * static_cast<GlobalId>(r));
+    const int ix = r % m, iy = r / m;
+    whole.group.push_back(static_cast<std::int64_t>(iy / 4) * 1000 + ix / 4);
+    const auto add = [&](int jx, int jy, Real v) {
+      if (jx < 0 || jy < 0 || jx >= m || jy >= m) return;
+      const bool diagonal = jx == ix && jy == iy;
+      whole.col.push_back(jy * m + jx);
+      whole.value.push_back(diagonal || (!is_dirichlet(iy) && !is_dirichlet(jy)) ? v : 0.0);
+    };
+    add(ix, iy - 1, -1);
+    add(ix - 1, iy, -1);
+    add(ix, iy, 4.01);
+    add(ix + 1, iy, -1);
+    add(ix, iy + 1, -1);
+    whole.row_ptr.push_back(whole.col.size());
+    whole.rhs.push_back(is_dirichlet(iy) ? 0.0 : u(rng));
+  }
+  return whole;
+}
+}  // namespace
+
+// The projection's active set re-solves with a few rows changed on the same pattern (LocalRows::values_only):
+// the solver that updates those rows of its setup gives the solution of a solver set up anew, bit for bit
+// with the two-level ssor and sgs (Eisenstat's system, updated row by row), to the tolerance with the
+// others (set up anew). Runs on 1, 2 and 3 ranks.
+TEST(PressureSolve, ReSolveWithChangedRowsEqualsANewSetup) {
+  int rank = 0, n_ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
+  const int m = 24;
+  const LocalRows first = split_system(padded_model_system(m, {m - 1}), rank, n_ranks);
+  LocalRows second = split_system(padded_model_system(m, {m - 2, m - 5}), rank, n_ranks);
+  // The rows whose values differ: y = m - 1 (a row again), m - 2 and m - 5 (now identity rows) and their
+  // neighbours.
+  for (std::size_t k = 0; k < second.n_rows(); ++k) {
+    const auto iy = static_cast<int>((second.row_id[k] - 1000) / 3) / m;
+    if (iy >= m - 6) second.changed_rows.push_back(static_cast<LocalIndex>(k));
+  }
+  for (const Preconditioner prec : {Preconditioner::ssor, Preconditioner::sgs, Preconditioner::muelu, Preconditioner::jacobi}) {
+    SCOPED_TRACE(to_string(prec));
+    PressureSolverSettings settings;
+    settings.preconditioner = prec;
+    settings.tolerance = 1e-10;
+    settings.max_iterations = 2000;
+    auto updated = make_pressure_solver(settings, MPI_COMM_WORLD);
+    auto fresh = make_pressure_solver(settings, MPI_COMM_WORLD);
+    std::vector<Real> x(first.n_rows(), 0.0);
+    EXPECT_TRUE(updated->solve(first, x).converged);
+    std::vector<Real> x_fresh = x;
+    second.values_only = true;
+    const PressureSolveResult a = updated->solve(second, x);
+    second.values_only = false;
+    const PressureSolveResult b = fresh->solve(second, x_fresh);
+    EXPECT_TRUE(a.converged);
+    EXPECT_TRUE(b.converged);
+    EXPECT_LT(a.residual, 10 * settings.tolerance);
+    const bool row_by_row = prec == Preconditioner::ssor || prec == Preconditioner::sgs;
+    Real largest = 0;
+    for (const Real v : x_fresh) largest = std::max(largest, std::abs(v));
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      if (row_by_row) {
+        EXPECT_EQ(x[k], x_fresh[k]) << "row " << k;
+      } else {
+        EXPECT_NEAR(x[k], x_fresh[k], 1e-7 * largest) << "row " << k;
+      }
+    }
+    if (row_by_row) EXPECT_EQ(a.iterations, b.iterations);
+  }
+}
+
 TEST(PressureSolve, RejectsUnknownChoices) {
   PressureSolverSettings settings;
   settings.preconditioner = static_cast<Preconditioner>(99);  // no such preconditioner
