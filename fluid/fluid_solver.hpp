@@ -76,7 +76,8 @@ Real fluid_work_weight(ParticleKind kind);
 /// p_k + p_j, b_k = max(0, p_k - p_cap), p_cap = stiffness_number rho dp^2 / dt^2: the stiffness carries at most
 /// p_cap. The term taken away, -2 b_k dn_k/dx_k, is zero wherever the neighbours of k lie on a regular
 /// arrangement (a full support, or the walls' lattice), so the force there is unchanged; as dt -> 0 the cap
-/// rises above every pressure and the force is the transpose of the rows' operator.
+/// rises above every pressure and the force is the transpose of the rows' operator. Not in the first step (the
+/// start from rest), whose force must hold its pressure exactly.
 inline constexpr Real stiffness_number = 0.09;
 
 /// Largest admissible fluid dt: time.dt when fixed, else the smallest of time.dt_max, the CFL limit of

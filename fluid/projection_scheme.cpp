@@ -474,7 +474,10 @@ class ProjectionScheme final : public PressureScheme {
   /// (stiffness_number in fluid/fluid_solver.hpp).
   void correct_projection(const Real dt) {
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
-    const Real p_cap = stiffness_number * rho * dp * dp / (dt * dt);
+    // The start from rest (the first step) carries its whole pressure: its force is the transpose of its
+    // rows, so that p0 holds the water (at fine spacings p0 is far above p_cap at the first step's dt).
+    const Real p_cap = initial_step() ? std::numeric_limits<Real>::infinity()
+                                      : stiffness_number * rho * dp * dp / (dt * dt);
     const std::size_t n = p.n_owned();
     dv.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
