@@ -186,8 +186,9 @@ class RunLoop {
         next_checkpoint = next_checkpoint_after(t_);
       }
     }
-    // Stopped by --max-steps or a signal between frames: a frame of the state reached.
-    if ((!more_steps() || summary_.interrupted_by != 0) && last_frame != t_) write_output();
+    // The state reached is always the last frame: at an end time between two output times, after --max-steps
+    // or a signal.
+    if (last_frame != t_) write_output();
     // The end state, to extend the run; after a signal always, to continue it.
     if ((every > 0 || summary_.interrupted_by != 0) && last_checkpoint != t_) write_checkpoint_now();
     report_progress(t_start, true);

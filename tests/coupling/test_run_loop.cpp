@@ -69,6 +69,19 @@ TEST(RunLoop, OneFramePerInterval) {
   EXPECT_NEAR(frames[4].first, 1e-2, 1e-12);
 }
 
+// A run whose end time falls between two output times still ends with a frame of its last state.
+TEST(RunLoop, EndTimeBetweenOutputTimesWritesTheEndState) {
+  CaseSpec spec = parse_case(water_case("{end: 7.0e-3, dt: 1.0e-3}"), "block.yaml");
+  spec.output.interval = 5e-3;
+  const std::string dir = fresh_dir("end_frame");
+  const RunSummary s = run_case(spec, build_scene(spec), quiet_settings(dir), MPI_COMM_SELF);
+  EXPECT_EQ(s.n_steps, 7u);
+  const auto frames = read_pvd(dir + "/particles.pvd");
+  ASSERT_EQ(frames.size(), 3u);  // 0, 5 ms and the end, 7 ms
+  EXPECT_NEAR(frames[1].first, 5e-3, 1e-12);
+  EXPECT_NEAR(frames[2].first, 7e-3, 1e-12);
+}
+
 // Without walls the block falls out of the domain: the run stops (RunFailure) once more than fluid.max_loss of
 // it has left, naming the body and the limit; with max_loss = 1 it runs to the end.
 TEST(RunLoop, FluidBodyThatFallsOutOfTheDomainStopsTheRun) {
