@@ -2,8 +2,10 @@
 // estimate; `mpsfsi run CASE` runs it. Exit codes: 0 success, 2 bad input (case file or command
 // line), 3 a run that went wrong (diagnosis printed), 4 an output file could not be written (disk full,
 // permissions; the files written before are complete), 1 an internal error, 128 + the signal (130 SIGINT,
-// 143 SIGTERM) a run stopped by a signal at the end of a step, with a frame and a checkpoint.
+// 143 SIGTERM) a run stopped by a signal at the end of a step, with a frame and a checkpoint. The 2D program
+// hands a 3D case to the 3D program built beside it (app/dimension_launch.hpp).
 #include "app/commands.hpp"
+#include "app/dimension_launch.hpp"
 #include "core/files.hpp"
 #include "core/version.hpp"
 #include "io/case.hpp"
@@ -51,12 +53,27 @@ const CLI::Validator positive_steps(
 
 int main(int argc, char** argv) {
   using namespace mpsfsi;
+#if MPSFSI_DIM == 2
+  // A 3D case goes to the 3D program, with the same arguments, before MPI starts (under mpirun every rank
+  // does the same); without that program the case's check below says what to do.
+  const std::string program3d = program_3d();
+  if (!program3d.empty() && requested_dimension(argc, argv) == 3) {
+    const std::string why = exec_program(program3d, argv);
+    std::cerr << "mpsfsi: error: cannot start the 3D program " << program3d << ": " << why << "\n";
+    return 1;
+  }
+  const std::string version = "mpsfsi " + version_and_dimension() + "\n3D program: " +
+                              (program3d.empty() ? std::string("not built (CMake option MPSFSI_WITH_3D)")
+                                                 : program3d + " (started for cases with dimension: 3)");
+#else
+  const std::string version = "mpsfsi " + version_and_dimension();
+#endif
   const MpiSession mpi(&argc, &argv);
   std::string command_line;
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
   CLI::App app{"mpsfsi: fluid-structure interaction with the Moving Particle Semi-implicit method"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "mpsfsi " + version_and_dimension());
+  app.set_version_flag("--version", version);
 
   // Options shared by run and check: the case, --dp and --set.
   const auto add_case_options = [](CLI::App* cmd, RunOptions& o, const bool required) {

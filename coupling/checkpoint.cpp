@@ -235,6 +235,30 @@ void write_checkpoint(const std::string& path, const CheckpointInfo& info, const
   write_file_atomically(path, bytes, "checkpoint");
 }
 
+std::string peek_checkpoint_case(const std::string& path) {
+  std::error_code ec;
+  const std::string file = fs::is_directory(path, ec) ? latest_in(path) : path;
+  std::ifstream in(file, std::ios::binary);
+  if (file.empty() || !in) return {};
+  const auto read_string = [&](std::string& s) {
+    std::uint64_t n = 0;
+    if (!in.read(reinterpret_cast<char*>(&n), sizeof n) || n > (std::uint64_t{1} << 32)) return false;
+    s.resize(n);
+    return static_cast<bool>(in.read(s.data(), static_cast<std::streamsize>(n)));
+  };
+  char preamble[preamble_size];
+  std::string version, header;
+  if (!in.read(preamble, preamble_size) || std::memcmp(preamble, magic, sizeof(magic)) != 0 || !read_string(version) ||
+      !read_string(header))
+    return {};
+  try {
+    BinaryReader r(header, file);
+    return read_info(r).resolved_yaml;
+  } catch (const std::exception&) {
+    return {};
+  }
+}
+
 Checkpoint read_checkpoint(const std::string& path, MPI_Comm comm) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);

@@ -71,6 +71,10 @@ void write_checkpoint(const std::string& path, const CheckpointInfo& info, const
 /// the problem (not a checkpoint, other format or program version, truncated, damaged).
 Checkpoint read_checkpoint(const std::string& path, MPI_Comm comm);
 
+/// The case a checkpoint holds (CheckpointInfo::resolved_yaml), read from its header alone; `path` may be a
+/// folder, as for read_checkpoint. Empty when the file is missing or not a readable checkpoint (nothing is
+/// checked beyond that: read_checkpoint says what is wrong). One process, no MPI.
+std::string peek_checkpoint_case(const std::string& path);
 /// File name of the checkpoint at time t: checkpoint_<t to 9 significant digits>.chk.
 std::string checkpoint_file_name(Real t);
 

@@ -132,6 +132,11 @@ FluidSetup fluid_setup(const CaseSpec& spec);
 /// materials, solid parameters, tank motion, bodies' angular velocities, solid loads and sources.
 SolidSetup solid_setup(const CaseSpec& spec);
 
+/// The spatial dimension a case asks for, from its `dimension:` key alone (YAML text, or a file with
+/// `from_file`): 2 when it has none, 0 when the text cannot be read or the value is not 2 or 3 (load_case
+/// then says what is wrong).
+int peek_case_dimension(const std::string& text_or_path, bool from_file);
+
 /// Parse and check a case file; `overrides` are "dotted.key=value" strings (--set), applied before
 /// checking. Throws CaseError with file, line, key and the expected form on any bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});

@@ -1332,8 +1332,10 @@ void check_dimension(const Source& src, const MapReader& top) {
                   : 2;
   if (d == dim) return;
   const std::string what_to_do =
-      dim == 2 ? "expected a 2D case (dimension: 2, the default), or run the 3D build (cmake -DMPSFSI_DIM=3, see README)"
-               : "expected a 3D case (dimension: 3), or run the 2D build (cmake -DMPSFSI_DIM=2, the default; see README)";
+      dim == 2 ? "expected a 2D case (dimension: 2, the default); 3D cases run in the 3D program, which mpsfsi starts when it "
+                 "was built beside it (<build>/3d/mpsfsi, CMake option MPSFSI_WITH_3D)"
+               : "expected a 3D case (dimension: 3); 2D cases run in the 2D program (<build>/mpsfsi, which starts this one for "
+                 "3D cases)";
   src.fail(f ? *f : top.field(), fmt::format("dimension = {}{}: this mpsfsi is built for {}D (MPSFSI_DIM={}); {}", d,
                                              f ? "" : " (the default)", dim, dim, what_to_do));
 }
@@ -1514,6 +1516,18 @@ CaseSpec parse(const std::string& text, const std::string& file, const fs::path&
 }
 
 }  // namespace
+
+int peek_case_dimension(const std::string& text_or_path, const bool from_file) {
+  try {
+    const YAML::Node root = from_file ? YAML::LoadFile(text_or_path) : YAML::Load(text_or_path);
+    if (!root.IsMap() || !root["dimension"]) return 2;
+    const YAML::Node d = root["dimension"];
+    if (!d.IsScalar()) return 0;
+    return d.Scalar() == "2" ? 2 : d.Scalar() == "3" ? 3 : 0;
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
 
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
   std::error_code ec;

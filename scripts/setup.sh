@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # One-step setup for mpsfsi on Debian 12: installs the missing Debian packages (as root),
-# configures and builds in Release into build/. Safe to run again: it only installs what is missing.
+# configures and builds in Release into build/ (the 2D program, and the 3D one in build/3d). Safe to run
+# again: it only installs what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

@@ -367,9 +367,24 @@ TEST(CaseFileErrors, VectorWithThreeComponents) {
   EXPECT_THAT(error_of(text2), HasSubstr("tank_motion.pivot = [0.3, 0, 1]: expected a point [x, y] in metres"));
 }
 
+// The dimension alone, as the program reads it to choose its 2D or 3D build (app/dimension_launch.cpp).
+TEST(CaseFile, PeekDimension) {
+  EXPECT_EQ(peek_case_dimension(minimal_case, false), 2);
+  EXPECT_EQ(peek_case_dimension(std::string(minimal_case) + "dimension: 3\n", false), 3);
+  EXPECT_EQ(peek_case_dimension("dimension: 2\n", false), 2);
+  EXPECT_EQ(peek_case_dimension("dimension: 4\n", false), 0);
+  EXPECT_EQ(peek_case_dimension("dimension: [3]\n", false), 0);
+  EXPECT_EQ(peek_case_dimension("dimension: 3\n  bad: [", false), 0);
+  EXPECT_EQ(peek_case_dimension("- a list\n", false), 2);
+  EXPECT_EQ(peek_case_dimension(std::string(MPSFSI_SOURCE_DIR) + "/cases/3d/dam_break.yaml", true), 3);
+  EXPECT_EQ(peek_case_dimension(std::string(MPSFSI_SOURCE_DIR) + "/cases/dam_break.yaml", true), 2);
+  EXPECT_EQ(peek_case_dimension("/nonexistent/case.yaml", true), 0);
+}
+
 TEST(CaseFileErrors, DimensionThreeIsRefusedByThe2DBuild) {
   const std::string expected = "dimension = 3: this mpsfsi is built for 2D (MPSFSI_DIM=2); expected a 2D case (dimension: 2, "
-                               "the default), or run the 3D build (cmake -DMPSFSI_DIM=3, see README)";
+                               "the default); 3D cases run in the 3D program, which mpsfsi starts when it was built "
+                               "beside it (<build>/3d/mpsfsi, CMake option MPSFSI_WITH_3D)";
   const std::string text = std::string(minimal_case) + "dimension: 3\n";
   EXPECT_EQ(error_of(text), at_line(text, "dimension:") + " " + expected);
   // Checked before anything else: the 3D vectors of a 3D case do not give their own error.

@@ -26,15 +26,40 @@ mpsfsi_cli_test(missing_case_file 2 "nonexistent.yaml" check nonexistent.yaml)
 mpsfsi_cli_test(no_subcommand 2 "subcommand")
 mpsfsi_cli_test(help 0 "run.*check" --help)
 mpsfsi_cli_test(version 0 "mpsfsi [0-9]+\\.[0-9]+\\.[0-9]+.* \\(2D\\)" --version)
-# The 3D cases (cases/3d/, which the glob of check_all_shipped_cases does not reach) are refused by the 2D
-# build for their dimension, before their 3D vectors are read.
+# The 3D cases (cases/3d/, which the glob of check_all_shipped_cases does not reach): the 2D program hands
+# them to the 3D program built beside it (app/dimension_launch.hpp), for check, run and --restart alike, also
+# under mpirun; a 2D build without it refuses them for their dimension, before their 3D vectors are read.
 file(GLOB cases_3d ${PROJECT_SOURCE_DIR}/cases/3d/*.yaml)
-foreach(f IN LISTS cases_3d)
-  get_filename_component(n ${f} NAME_WE)
-  mpsfsi_cli_test(3d_case_${n}_refused 2
-    "${n}\\.yaml:[0-9]+: dimension = 3: this mpsfsi is built for 2D \\(MPSFSI_DIM=2\\); expected a 2D case .*run the 3D build \\(cmake -DMPSFSI_DIM=3"
-    check ${f})
-endforeach()
+if(MPSFSI_WITH_3D)
+  mpsfsi_cli_test(version_names_the_3d_program 0 "\\(2D\\)\n3D program: [^\n]*/3d/mpsfsi \\(started for cases with dimension: 3\\)"
+    --version)
+  mpsfsi_cli_test(3d_case_checked 0 "case dam_break_3d .*total: [0-9]+ particles"
+    check ${PROJECT_SOURCE_DIR}/cases/3d/dam_break.yaml)
+  set(runs3d ${CMAKE_CURRENT_BINARY_DIR}/cli_runs_3d)
+  mpsfsi_cli_test(3d_case_run 0 "\\(3D\\): case hydrostatic_3d.*run summary: [0-9]+ steps to t = 0\\.02 s"
+    run ${PROJECT_SOURCE_DIR}/cases/3d/hydrostatic.yaml --overwrite --output ${runs3d}/hydrostatic --end-time 0.02
+    --checkpoint-every 0.01)
+  set_tests_properties(cli_3d_case_run PROPERTIES FIXTURES_SETUP cli_3d_checkpoint)
+  # The checkpoint alone (no case file) tells its dimension.
+  mpsfsi_cli_test(3d_case_restart 0 "\\(3D\\): case hydrostatic_3d.*run summary: [0-9]+ steps to t = 0\\.03 s"
+    run --restart ${runs3d}/hydrostatic/checkpoint_0.02.chk --output ${runs3d}/hydrostatic_restart --overwrite
+    --end-time 0.03)
+  set_tests_properties(cli_3d_case_restart PROPERTIES FIXTURES_REQUIRED cli_3d_checkpoint)
+  # --set dimension=3 on a 2D case is the 3D program's to refuse (its 2D vectors).
+  mpsfsi_cli_test(3d_set_on_a_2d_case 2 "hydrostatic\\.yaml:[0-9]+: domain\\.min = \\[-0\\.05, -0\\.05\\]: expected the lowest corner \\[x, y, z\\]"
+    check ${PROJECT_SOURCE_DIR}/cases/hydrostatic.yaml --set dimension=3)
+  add_test(NAME cli_mpi_3d_case_run
+           COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|run|${PROJECT_SOURCE_DIR}/cases/3d/hydrostatic.yaml|--overwrite|--output|${runs3d}/hydrostatic_np2|--end-time|0.01"
+                   -DCODE=0 "-DREGEX=\\(3D\\): case hydrostatic_3d \\([0-9]+ particles\\)" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
+  set_tests_properties(cli_mpi_3d_case_run PROPERTIES LABELS mpi)
+else()
+  foreach(f IN LISTS cases_3d)
+    get_filename_component(n ${f} NAME_WE)
+    mpsfsi_cli_test(3d_case_${n}_refused 2
+      "${n}\\.yaml:[0-9]+: dimension = 3: this mpsfsi is built for 2D \\(MPSFSI_DIM=2\\); expected a 2D case .*3D cases run in the 3D program"
+      check ${f})
+  endforeach()
+endif()
 
 # Under mpirun an input error is printed once (by rank 0), not by every rank.
 add_test(NAME cli_mpi_input_error_printed_once

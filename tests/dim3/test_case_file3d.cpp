@@ -163,8 +163,8 @@ TEST(CaseFile3d, RollAxisIsReadAndNormalised) {
 }
 
 TEST(CaseFile3d, DimensionMustBeThree) {
-  const std::string expected = "this mpsfsi is built for 3D (MPSFSI_DIM=3); expected a 3D case (dimension: 3), or run the "
-                               "2D build (cmake -DMPSFSI_DIM=2, the default; see README)";
+  const std::string expected = "this mpsfsi is built for 3D (MPSFSI_DIM=3); expected a 3D case (dimension: 3); 2D cases run in "
+                               "the 2D program (<build>/mpsfsi, which starts this one for 3D cases)";
   // Without the key the case is 2D (the default): refused before its 3D vectors are read, naming the key.
   const std::string none = case_with("dimension: 3\n", "");
   EXPECT_EQ(error_of(none), file_name + ":1: dimension = 2 (the default): " + expected);

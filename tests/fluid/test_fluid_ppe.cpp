@@ -349,7 +349,9 @@ TEST(PressureSolve, ReSolveWithChangedRowsEqualsANewSetup) {
         EXPECT_NEAR(x[k], x_fresh[k], 1e-7 * largest) << "row " << k;
       }
     }
-    if (row_by_row) EXPECT_EQ(a.iterations, b.iterations);
+    if (row_by_row) {
+      EXPECT_EQ(a.iterations, b.iterations);
+    }
   }
 }
 
