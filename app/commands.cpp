@@ -19,6 +19,7 @@
 #include <mpi.h>
 
 #include <climits>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -82,6 +83,13 @@ int command_check(const RunOptions& opts) {
   for (std::size_t k = 0; k < spec.bodies.size() && k < scene.counts.size(); ++k) {
     const BodyCount& c = scene.counts[k];
     std::string line = fmt::format("  {:<20} {}", c.name, show_rect(c.extent));
+    if (c.shape_volume)
+      line += fmt::format("; {} particles fill {:.6g} m{} against the {}'s {:.6g} ({:+.2f} %)", c.n_particles,
+                          static_cast<double>(c.n_particles) * std::pow(spec.dp, dim), dim == 2 ? "2" : "3",
+                          spec.bodies[k].round->kind == RoundShape::Kind::sphere ? (dim == 2 ? "disc" : "sphere")
+                                                                                  : "cylinder",
+                          *c.shape_volume,
+                          100 * (static_cast<double>(c.n_particles) * std::pow(spec.dp, dim) / *c.shape_volume - 1));
     if (c.free_length)
       line += fmt::format("; free length {:.6g} m along {} (file: {:.6g} m)", *c.free_length, "xyz"[c.free_axis],
                           c.file_free_length);

@@ -1,5 +1,6 @@
-// Lattice geometry in MPSFSI_DIM dimensions: filled rectangles / boxes, box walls, wall blocks
-// (seed 004 §4.3). Every builder walks the lattice cells with axis 0 fastest (row by row in 2D).
+// Lattice geometry in MPSFSI_DIM dimensions: filled rectangles / boxes, spheres and cylinders; box walls, and
+// blocks, spheres and cylinders of wall particles (seed 004 §4.3). Every builder walks the lattice cells with
+// axis 0 fastest (row by row in 2D).
 #include "core/geometry.hpp"
 
 #include <algorithm>
@@ -62,7 +63,12 @@ std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, const Real dp) {
   return x;
 }
 
-std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp) {
+namespace {
+
+/// Checks the cylinder's arguments and calls f(x, s, r) for every lattice point x of fill_cylinder inside it,
+/// s its coordinate along the unit axis e from `base` and r = x - base - s e its offset from the axis.
+template <class F>
+void for_each_cylinder_point(const Vec& base, const Vec& axis, const Real radius, const Real dp, F&& f) {
   if (!(dp > 0)) throw std::invalid_argument("cylinder: dp must be positive");
   if (!(radius > 0)) throw std::invalid_argument("cylinder: radius must be positive");
   const Real length = axis.norm();
@@ -74,15 +80,146 @@ std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, const Real radi
   const Vec lo = base.cwiseMin(base + axis) - reach, hi = base.cwiseMax(base + axis) + reach;
   IVec last;
   for (int a = 0; a < dim; ++a) last[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / dp)) - 1;
-  std::vector<Vec> points;
   const Real tol = 1e-9 * dp;
   for_each_cell(IVec::Zero(), last, [&](const IVec& i) {
     const Vec x = centre(lo, i, dp);
     const Real s = (x - base).dot(e);
     if (s < -tol || s > length + tol) return;
-    if ((x - base - s * e).norm() <= radius + tol) points.push_back(x);
+    const Vec r = x - base - s * e;
+    if (r.norm() <= radius + tol) f(x, s, r);
   });
+}
+
+/// Checks the ball's arguments and calls f(x) for every lattice point x of fill_sphere inside it.
+template <class F>
+void for_each_sphere_point(const Vec& centre_point, const Real radius, const Real dp, F&& f) {
+  if (!(dp > 0)) throw std::invalid_argument("sphere: dp must be positive");
+  if (!(radius > 0)) throw std::invalid_argument("sphere: radius must be positive");
+  const Vec lo = centre_point - Vec::Constant(radius);
+  const IVec last = IVec::Constant(static_cast<int>(std::ceil(2 * radius / dp)) - 1);
+  const Real tol = 1e-9 * dp;
+  for_each_cell(IVec::Zero(), last, [&](const IVec& i) {
+    const Vec x = centre(lo, i, dp);
+    if ((x - centre_point).norm() <= radius + tol) f(x);
+  });
+}
+
+/// The wall layer (depth below dp) or a dummy layer (below (1 + n_dummy) dp) of a point at `depth` below a
+/// surface: 0 wall, 1 dummy, -1 neither.
+int wall_layer(const Real depth, const Real dp, const int n_dummy) {
+  if (depth < dp) return 0;
+  return depth < (1 + n_dummy) * dp ? 1 : -1;
+}
+
+}  // namespace
+
+std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp) {
+  std::vector<Vec> points;
+  for_each_cylinder_point(base, axis, radius, dp, [&](const Vec& x, Real, const Vec&) { points.push_back(x); });
   return points;
+}
+
+std::vector<Vec> fill_sphere(const Vec& centre_point, const Real radius, const Real dp) {
+  std::vector<Vec> points;
+  for_each_sphere_point(centre_point, radius, dp, [&](const Vec& x) { points.push_back(x); });
+  return points;
+}
+
+namespace {
+
+/// The offset of a wall point `depth` below a surface with outward normal `out`: never zero (a point on the
+/// surface, within the lattice's tolerance, gets a millionth of dp), since the fluid takes the surface's normal
+/// from it (fluid/fluid_core.cpp keep_out_of_walls).
+Vec surface_offset(const Real depth, const Vec& out, const Real dp) { return std::max(depth, 1e-6 * dp) * out; }
+
+/// A unit vector normal to the unit vector e.
+Vec normal_to(const Vec& e) {
+  int a = 0;  // the coordinate axis least along e
+  for (int b = 1; b < dim; ++b)
+    if (std::abs(e[b]) < std::abs(e[a])) a = b;
+  const Vec u = Vec::Unit(a) - e[a] * e;
+  return u.normalized();
+}
+
+/// A point x of a sphere's lattice: its depth below the surface and the offset to the nearest surface point.
+WallPoint sphere_point(const Vec& x, const Vec& centre_point, const Real radius, const Real dp, Real& depth) {
+  const Vec r = x - centre_point;
+  const Real rho = r.norm();
+  depth = std::max(Real(0), radius - rho);
+  // At the centre (a ball of a few particles) any direction is nearest: the last axis.
+  const Vec out = rho > 0 ? Vec(r / rho) : Vec(Vec::Unit(dim - 1));
+  return {x, false, surface_offset(depth, out, dp)};
+}
+
+/// A point x of a cylinder's lattice (s along the unit axis e, r off the axis): its depth below the nearest of
+/// the lateral surface and the end faces, and the offset to that surface's nearest point.
+WallPoint cylinder_point(const Vec& x, const Real s, const Vec& r, const Vec& e, const Real length, const Real radius,
+                         const Real dp, Real& depth) {
+  const Real rho = r.norm();
+  const Real lateral = std::max(Real(0), radius - rho);
+  const Real to_base = std::max(Real(0), s), to_top = std::max(Real(0), length - s);
+  depth = std::min({lateral, to_base, to_top});
+  if (depth == to_base) return {x, false, surface_offset(depth, -e, dp)};
+  if (depth == to_top) return {x, false, surface_offset(depth, e, dp)};
+  // On the axis of a thin cylinder any direction normal to it is nearest.
+  return {x, false, surface_offset(depth, rho > 0 ? Vec(r / rho) : normal_to(e), dp)};
+}
+
+}  // namespace
+
+std::vector<WallPoint> sphere_walls(const Vec& centre_point, const Real radius, const Real dp, const int n_dummy) {
+  std::vector<WallPoint> pts;
+  for_each_sphere_point(centre_point, radius, dp, [&](const Vec& x) {
+    Real depth = 0;
+    WallPoint p = sphere_point(x, centre_point, radius, dp, depth);
+    const int layer = wall_layer(depth, dp, n_dummy);
+    if (layer < 0) return;
+    p.is_wall = layer == 0;
+    pts.push_back(p);
+  });
+  return pts;
+}
+
+std::vector<WallPoint> cylinder_walls(const Vec& base, const Vec& axis, const Real radius, const Real dp,
+                                      const int n_dummy) {
+  const Real length = axis.norm();
+  std::vector<WallPoint> pts;
+  for_each_cylinder_point(base, axis, radius, dp, [&](const Vec& x, const Real s, const Vec& r) {
+    Real depth = 0;
+    WallPoint p = cylinder_point(x, s, r, axis / length, length, radius, dp, depth);
+    const int layer = wall_layer(depth, dp, n_dummy);
+    if (layer < 0) return;
+    p.is_wall = layer == 0;
+    pts.push_back(p);
+  });
+  return pts;
+}
+
+RoundCount count_sphere(const Vec& centre_point, const Real radius, const Real dp, const int n_dummy) {
+  RoundCount c;
+  for_each_sphere_point(centre_point, radius, dp, [&](const Vec& x) {
+    Real depth = 0;
+    sphere_point(x, centre_point, radius, dp, depth);
+    const int layer = wall_layer(depth, dp, n_dummy);
+    ++c.filled;
+    c.wall += layer == 0;
+    c.layers += layer >= 0;
+  });
+  return c;
+}
+
+RoundCount count_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp, const int n_dummy) {
+  const Real length = axis.norm();
+  RoundCount c;
+  for_each_cylinder_point(base, axis, radius, dp, [&](const Vec& x, const Real s, const Vec& r) {
+    Real depth = 0;
+    cylinder_point(x, s, r, axis / length, length, radius, dp, depth);
+    const int layer = wall_layer(depth, dp, n_dummy);
+    ++c.filled;
+    c.wall += layer == 0;
+    c.layers += layer >= 0;
+  });
+  return c;
 }
 
 std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, const Real dp, const bool open_top,

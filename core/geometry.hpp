@@ -1,7 +1,7 @@
 // Particle geometry on a lattice of spacing dp (square in 2D, simple cubic in 3D): filled rectangles
-// (boxes in 3D), box walls and blocks made of one wall layer plus dummy layers (seed 004 §4.3). A
-// rectangle of n x m (x l) cells of side dp gets one particle at the centre of each cell, so bodies that
-// touch along a face sit exactly dp apart and never overlap. "Rectangle" below means the axis-aligned
+// (boxes in 3D), spheres and cylinders; box walls, and blocks, spheres and cylinders made of one wall layer plus
+// dummy layers (seed 004 §4.3). A rectangle of n x m (x l) cells of side dp gets one particle at the centre of
+// each cell, so bodies that touch along a face sit exactly dp apart and never overlap. "Rectangle" below means the axis-aligned
 // box [lo, hi] in the build's dimension.
 #pragma once
 
@@ -40,6 +40,11 @@ std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, Real dp);
 /// std::invalid_argument when dp or radius is not positive or the axis is zero.
 std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp);
 
+/// Particle centres filling the ball of radius `radius` about `centre` (a disc in 2D): the points
+/// lo + (i + 1/2 [, ...]) dp of the lattice anchored at the ball's low corner lo = centre - radius whose distance
+/// from the centre is at most `radius`. Throws std::invalid_argument when dp or radius is not positive.
+std::vector<Vec> fill_sphere(const Vec& centre, Real radius, Real dp);
+
 /// A lattice point of a wall, whether it belongs to the wall layer (true) or a dummy layer (false), and the
 /// offset from it to the nearest point of the wetted surface (the face the fluid touches; at an edge or a corner
 /// the edge or corner point). The wall particles keep the offset (particle field wall_surface_field) so that the
@@ -63,5 +68,24 @@ std::vector<WallPoint> box_walls(const Vec& lo, const Vec& hi, Real dp, bool ope
 /// dummy; deeper particles are not needed by the kernel and are left out. to_surface points to the nearest
 /// face, or to the edge or corner where two or three faces are equally near.
 std::vector<WallPoint> block_walls(const Vec& lo, const Vec& hi, Real dp, int n_dummy = 2);
+
+/// A solid ball (a disc in 2D) made of wall particles, on the lattice of fill_sphere: the points less than dp
+/// below the surface are wall, the next n_dummy layers (depth below (1 + n_dummy) dp) dummy; deeper points are
+/// left out, as in block_walls. to_surface points radially out to the surface.
+std::vector<WallPoint> sphere_walls(const Vec& centre, Real radius, Real dp, int n_dummy = 2);
+
+/// A solid cylinder made of wall particles, on the lattice of fill_cylinder: the depth of a point is its
+/// distance to the nearest of the lateral surface and the two end faces; layers as in sphere_walls, and
+/// to_surface points to the nearest point of that surface.
+std::vector<WallPoint> cylinder_walls(const Vec& base, const Vec& axis, Real radius, Real dp, int n_dummy = 2);
+
+/// The points of a sphere's or cylinder's lattice, counted without making them: `filled` those of fill_sphere
+/// (fill_cylinder), `wall` and `layers` the wall points and the wall and dummy points of sphere_walls
+/// (cylinder_walls) with n_dummy dummy layers.
+struct RoundCount {
+  std::size_t filled = 0, wall = 0, layers = 0;
+};
+RoundCount count_sphere(const Vec& centre, Real radius, Real dp, int n_dummy = 2);
+RoundCount count_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp, int n_dummy = 2);
 
 }  // namespace mpsfsi

@@ -238,8 +238,9 @@ void write_checkpoint(const std::string& path, const CheckpointInfo& info, const
 std::string peek_checkpoint_case(const std::string& path) {
   std::error_code ec;
   const std::string file = fs::is_directory(path, ec) ? latest_in(path) : path;
+  if (file.empty() || !fs::is_regular_file(file, ec)) return {};  // a FIFO or a device: read_checkpoint says why
   std::ifstream in(file, std::ios::binary);
-  if (file.empty() || !in) return {};
+  if (!in) return {};
   const auto read_string = [&](std::string& s) {
     std::uint64_t n = 0;
     if (!in.read(reinterpret_cast<char*>(&n), sizeof n) || n > (std::uint64_t{1} << 32)) return false;

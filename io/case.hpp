@@ -29,11 +29,25 @@ class CaseError : public std::runtime_error {
 
 enum class BodyKind { fluid, solid };
 
+/// A body or wall that is not a rectangle: a ball (`sphere`: centre and radius; a disc in 2D) or a cylinder
+/// (`cylinder`: the centre of its base, the axis from there to the other end, and the radius; in 2D its section
+/// through the axis, a strip), filled on the lattice (core/geometry.hpp fill_sphere, fill_cylinder).
+struct RoundShape {
+  enum class Kind { sphere, cylinder };
+  Kind kind = Kind::sphere;
+  Vec centre = Vec::Zero();  ///< sphere: its centre; cylinder: the centre of its base
+  Vec axis = Vec::Zero();    ///< cylinder: from the base's centre to the other end's
+  Real radius = 0;
+  /// The smallest rectangle (box) that holds the shape.
+  Rect bounds() const;
+};
+
 struct BodySpec {
   std::string name;
   BodyKind kind = BodyKind::fluid;
   std::string material;             ///< name of a fluid material (fluid) or solid material (solid)
-  Rect rect;                        ///< region filled with particles
+  Rect rect;                        ///< region filled with particles; with `round` the shape's bounds
+  std::optional<RoundShape> round;  ///< a sphere or cylinder filled with particles instead of the rectangle
   std::optional<Rect> clamp;        ///< solid only: particles inside are clamped
   Vec velocity = Vec::Zero();       ///< initial velocity [m/s]
   Angular angular_velocity = angular_zero();       ///< initial angular velocity about the body's centroid [rad/s] (a vector in 3D)
@@ -44,13 +58,16 @@ struct BodySpec {
 /// clamped end may be embedded in a wall (the wall particles there give way, see io/scene.cpp).
 Rect free_part(const BodySpec& b);
 
-enum class WallType { box, block };
+/// A box (a tank: the wall outside its inner rectangle) or a solid obstacle of wall particles: a block, a
+/// sphere or a cylinder (the wall layer and the dummy layers inside its surface).
+enum class WallType { box, block, sphere, cylinder };
 
 struct WallSpec {
   std::string name;
   WallType type = WallType::box;
-  Rect rect;              ///< box: the inner (wetted) rectangle; block: the solid block itself
+  Rect rect;              ///< box: the inner (wetted) rectangle; block: the solid block itself; sphere, cylinder: the bounds
   bool open_top = true;   ///< box only: no lid
+  std::optional<RoundShape> round;  ///< sphere, cylinder: the shape
 };
 
 enum class ProbeType { pressure, surge_front, column_height, displacement };
@@ -132,9 +149,9 @@ FluidSetup fluid_setup(const CaseSpec& spec);
 /// materials, solid parameters, tank motion, bodies' angular velocities, solid loads and sources.
 SolidSetup solid_setup(const CaseSpec& spec);
 
-/// The spatial dimension a case asks for, from its `dimension:` key alone (YAML text, or a file with
-/// `from_file`): 2 when it has none, 0 when the text cannot be read or the value is not 2 or 3 (load_case
-/// then says what is wrong).
+/// The spatial dimension a case asks for, from its `dimension:` key alone (YAML text, or a regular file with
+/// `from_file`): 2 when it has none, 0 when the text cannot be read, the file is not a regular file or the value
+/// is not 2 or 3 (load_case then says what is wrong).
 int peek_case_dimension(const std::string& text_or_path, bool from_file);
 
 /// Parse and check a case file; `overrides` are "dotted.key=value" strings (--set), applied before

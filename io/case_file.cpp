@@ -51,6 +51,15 @@ int CaseSpec::solid_material_index(const std::string& name) const {
   return index_by_name(solid_materials, name);
 }
 
+Rect RoundShape::bounds() const {
+  if (kind == Kind::sphere) return {centre - Vec::Constant(radius), centre + Vec::Constant(radius)};
+  // The end discs' extents along each coordinate axis: radius sqrt(1 - e_a^2).
+  const Vec e = axis.normalized();
+  Vec reach;
+  for (int a = 0; a < dim; ++a) reach[a] = radius * std::sqrt(std::max(Real(0), 1 - e[a] * e[a]));
+  return {centre.cwiseMin(centre + axis) - reach, centre.cwiseMax(centre + axis) + reach};
+}
+
 Rect free_part(const BodySpec& b) {
   Rect r = b.rect;
   if (!b.clamp) return r;
@@ -753,6 +762,29 @@ std::string unique_name(MapReader& r, std::map<std::string, std::string>& names,
   return name;
 }
 
+const std::string sphere_form = std::string(dim == 2 ? "a disc" : "a ball") + " {centre: " + components() +
+                                ", radius: R} in metres";
+const std::string cylinder_form = "a cylinder {base: " + components() + ", axis: " + components() +
+                                  ", radius: R} in metres (base: the centre of one end; axis: from there to the other end)";
+
+/// The sphere or cylinder under `key` ("sphere" or "cylinder") of r: a point, a non-zero axis, a positive radius.
+RoundShape read_round(MapReader& r, const std::string& key) {
+  const bool sphere = key == "sphere";
+  const std::string& form = sphere ? sphere_form : cylinder_form;
+  MapReader m(r.source(), r.required(key, form), form);
+  RoundShape s;
+  s.kind = sphere ? RoundShape::Kind::sphere : RoundShape::Kind::cylinder;
+  s.centre = m.vec(sphere ? "centre" : "base", point_form);
+  if (!sphere) {
+    const std::string axis_form = "a non-zero axis " + components() + " in metres, from the base to the other end";
+    s.axis = m.vec("axis", axis_form);
+    if (!(s.axis.norm() > 0)) r.source().expected(m.at("axis"), axis_form);
+  }
+  s.radius = m.number("radius", positive, "a positive radius in metres");
+  m.finish();
+  return s;
+}
+
 /// Fields of the bodies and walls kept for the cross-checks.
 struct GeometryFields {
   std::vector<Field> body_rect, body_material, body_clamp, wall_rect;
@@ -760,14 +792,28 @@ struct GeometryFields {
 
 void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g) {
   const Source& src = top.source();
-  const std::string form = "a list of bodies, each {name, kind: fluid | solid, material, rectangle, ...}";
+  const std::string form = "a list of bodies, each {name, kind: fluid | solid, material, rectangle | sphere | cylinder, ...}";
   for (const Field& item : top.list("bodies", form, true)) {
-    MapReader r(src, item, "a body {name, kind: fluid | solid, material, rectangle, ...}");
+    MapReader r(src, item, "a body {name, kind: fluid | solid, material, rectangle | sphere | cylinder, ...}");
     BodySpec b;
     b.name = unique_name(r, names, "bodies and walls");
     b.kind = r.choice("kind", {"fluid", "solid"}) == "solid" ? BodyKind::solid : BodyKind::fluid;
     b.material = r.name("material", "the name of a material of the body's kind");
-    b.rect = r.rect("rectangle", rect_form + " filled with particles");
+    // The shape: a rectangle, a sphere or a cylinder, exactly one.
+    std::string shape;
+    for (const char* key : {"rectangle", "sphere", "cylinder"}) {
+      if (!r.has(key)) continue;
+      if (!shape.empty())
+        src.fail(r.at(key), fmt::format("{}: '{}' and '{}' given; expected one shape: rectangle, sphere or cylinder",
+                                        item.path.empty() ? "body" : item.path, shape, key));
+      shape = key;
+    }
+    if (shape.empty() || shape == "rectangle") {
+      b.rect = r.rect("rectangle", rect_form + " filled with particles (or a sphere or cylinder instead)");
+    } else {
+      b.round = read_round(r, shape);
+      b.rect = b.round->bounds();
+    }
     b.clamp = r.optional_rect("clamp", rect_form + " (solid bodies: particles inside are clamped)");
     b.velocity = r.vec("velocity", Vec::Zero(), "an initial velocity " + components("v") + " in m/s");
     if (!(b.velocity.norm() <= max_speed))
@@ -783,7 +829,7 @@ void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::stri
                                                          "{:g} rad/s", components("w"), max_angular_velocity));
 #endif
     r.finish();
-    g.body_rect.push_back(r.at("rectangle"));
+    g.body_rect.push_back(r.at(shape.empty() ? "rectangle" : shape));
     g.body_material.push_back(r.at("material"));
     g.body_clamp.push_back(r.at("clamp"));
     if (b.clamp && b.kind == BodyKind::fluid)
@@ -795,15 +841,24 @@ void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::stri
 
 void read_walls(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g) {
   const Source& src = top.source();
-  for (const Field& item : top.list("walls", "a list of walls, each {name, type: box | block, rectangle}", false)) {
-    MapReader r(src, item, "a wall {name, type: box | block, rectangle, open_top}");
+  for (const Field& item : top.list("walls", "a list of walls, each {name, type: box | block | sphere | cylinder, ...}",
+                                    false)) {
+    MapReader r(src, item, "a wall {name, type: box | block | sphere | cylinder, rectangle | sphere | cylinder, open_top}");
     WallSpec w;
     w.name = unique_name(r, names, "bodies and walls");
-    w.type = r.choice("type", {"box", "block"}) == "box" ? WallType::box : WallType::block;
-    w.rect = r.rect("rectangle", rect_form + (w.type == WallType::box ? " (inner, wetted side of the box)" : " (the block)"));
+    const std::string type = r.choice("type", {"box", "block", "sphere", "cylinder"});
+    w.type = type == "box" ? WallType::box : type == "block" ? WallType::block
+           : type == "sphere" ? WallType::sphere : WallType::cylinder;
+    const bool round = w.type == WallType::sphere || w.type == WallType::cylinder;
+    if (round) {
+      w.round = read_round(r, type);
+      w.rect = w.round->bounds();
+    } else {
+      w.rect = r.rect("rectangle", rect_form + (w.type == WallType::box ? " (inner, wetted side of the box)" : " (the block)"));
+    }
     if (w.type == WallType::box) w.open_top = r.boolean("open_top", true, "true or false (box without a lid)");
     r.finish();
-    g.wall_rect.push_back(r.at("rectangle"));
+    g.wall_rect.push_back(r.at(round ? type : "rectangle"));
     spec.walls.push_back(w);
   }
 }
@@ -856,7 +911,7 @@ void check_geometry(const Source& src, const CaseSpec& spec, const GeometryField
     bool in_a_box = false;
     for (std::size_t k = 0; k < spec.walls.size(); ++k) {
       const WallSpec& w = spec.walls[k];
-      if (w.type == WallType::block && overlaps(free_part(b), w.rect))
+      if (w.type != WallType::box && overlaps(free_part(b), w.rect))  // a sphere or cylinder by its bounds
         src.fail(f, fmt::format("{} overlaps {} ('{}'): bodies must not overlap walls", f.path, g.wall_rect[k].path, w.name));
       if (w.type == WallType::box) {
         if (!first_box) first_box = &w;
@@ -1518,6 +1573,8 @@ CaseSpec parse(const std::string& text, const std::string& file, const fs::path&
 }  // namespace
 
 int peek_case_dimension(const std::string& text_or_path, const bool from_file) {
+  std::error_code ec;
+  if (from_file && !fs::is_regular_file(text_or_path, ec)) return 0;  // not read here (a FIFO would block)
   try {
     const YAML::Node root = from_file ? YAML::LoadFile(text_or_path) : YAML::Load(text_or_path);
     if (!root.IsMap() || !root["dimension"]) return 2;

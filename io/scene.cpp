@@ -21,6 +21,19 @@ namespace mpsfsi {
 
 namespace {
 
+/// The volume (area in 2D) of a sphere or cylinder.
+double round_volume(const RoundShape& s) {
+  if (s.kind == RoundShape::Kind::sphere)
+    return dim == 2 ? pi * s.radius * s.radius : 4.0 / 3.0 * pi * std::pow(s.radius, 3);
+  return (dim == 2 ? 2 * s.radius : pi * s.radius * s.radius) * s.axis.norm();
+}
+
+/// The lattice points of a sphere or cylinder and of its wall layers (core/geometry.hpp), counted.
+RoundCount count_round(const RoundShape& s, const Real dp) {
+  return s.kind == RoundShape::Kind::sphere ? count_sphere(s.centre, s.radius, dp)
+                                            : count_cylinder(s.centre, s.axis, s.radius, dp);
+}
+
 void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   auto& p = scene.particles;
   const int body_index = static_cast<int>(p.bodies.size());
@@ -28,7 +41,13 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   const int material = is_solid ? spec.solid_material_index(b.material) : spec.fluid_material_index(b.material);
   if (material < 0) throw CaseError(fmt::format("{}: body '{}': unknown material '{}'", spec.file, b.name, b.material));
   p.bodies.push_back({b.name, is_solid ? ParticleKind::solid : ParticleKind::fluid, material});
-  const auto points = fill_rectangle(b.rect.lo, b.rect.hi, spec.dp);
+  const auto points = !b.round ? fill_rectangle(b.rect.lo, b.rect.hi, spec.dp)
+                     : b.round->kind == RoundShape::Kind::sphere
+                         ? fill_sphere(b.round->centre, b.round->radius, spec.dp)
+                         : fill_cylinder(b.round->centre, b.round->axis, b.round->radius, spec.dp);
+  if (points.empty())
+    throw CaseError(fmt::format("{}: body '{}' holds no lattice point at dp = {:g} m; expected a larger body or a smaller dp",
+                                spec.file, b.name, spec.dp));
   Vec centroid = Vec::Zero();
   for (const auto& x : points) centroid += x;
   centroid /= static_cast<Real>(points.size());
@@ -59,8 +78,11 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   }
   const Vec half = Vec::Constant(0.5 * spec.dp);
   count.extent = {lo - half, hi + half};
-  count.extent_difference = std::max((count.extent.lo - b.rect.lo).cwiseAbs().maxCoeff(),
-                                     (count.extent.hi - b.rect.hi).cwiseAbs().maxCoeff());
+  if (b.round)
+    count.shape_volume = round_volume(*b.round);
+  else
+    count.extent_difference = std::max((count.extent.lo - b.rect.lo).cwiseAbs().maxCoeff(),
+                                       (count.extent.hi - b.rect.hi).cwiseAbs().maxCoeff());
   if (is_solid && b.clamp) {
     count.free_axis = free_axis;
     count.free_length = free_hi >= free_lo ? free_hi - free_lo + spec.dp : 0;
@@ -82,8 +104,10 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   auto& p = scene.particles;
   const int body_index = static_cast<int>(p.bodies.size());
   p.bodies.push_back({w.name, ParticleKind::wall, -1});
-  const auto all_points = w.type == WallType::box ? box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top)
-                                                  : block_walls(w.rect.lo, w.rect.hi, spec.dp);
+  const auto all_points = w.type == WallType::box      ? box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top)
+                          : w.type == WallType::block  ? block_walls(w.rect.lo, w.rect.hi, spec.dp)
+                          : w.type == WallType::sphere ? sphere_walls(w.round->centre, w.round->radius, spec.dp)
+                                                       : cylinder_walls(w.round->centre, w.round->axis, w.round->radius, spec.dp);
   std::vector<WallPoint> points;
   for (const auto& pt : all_points)
     if (clamped.empty() || !taken_by_clamp(p, clamped, pt.x, spec.dp)) points.push_back(pt);
@@ -204,11 +228,20 @@ std::string show_bytes(const double bytes) {
 
 }  // namespace
 
+
 ParticleCounts count_particles(const CaseSpec& spec) {
   ParticleCounts n;
-  for (const auto& b : spec.bodies) (b.kind == BodyKind::solid ? n.solid : n.fluid) += product(cells(b.rect, spec.dp));
-  constexpr std::size_t n_dummy = 2;  // the default of box_walls and block_walls, which build_scene uses
+  for (const auto& b : spec.bodies)
+    (b.kind == BodyKind::solid ? n.solid : n.fluid) +=
+        b.round ? count_round(*b.round, spec.dp).filled : product(cells(b.rect, spec.dp));
+  constexpr std::size_t n_dummy = 2;  // the default of the wall builders, which build_scene uses
   for (const auto& w : spec.walls) {
+    if (w.round) {  // the layers inside the surface
+      const RoundCount c = count_round(*w.round, spec.dp);
+      n.wall += c.wall;
+      n.dummy += c.layers - c.wall;
+      continue;
+    }
     const Cells c = cells(w.rect, spec.dp);
     const std::size_t wall = w.type == WallType::box ? box_cells(c, 1, w.open_top) : block_cells(c, 0);
     const std::size_t all = w.type == WallType::box ? box_cells(c, 1 + n_dummy, w.open_top) : block_cells(c, n_dummy);

@@ -23,8 +23,11 @@ struct BodyCount {
   /// Bodies: the region the particles represent, their bounding box widened by dp/2 on each side (the
   /// file's rectangle rounded to whole lattice cells).
   Rect extent;
-  /// Bodies: the largest distance between a side of `extent` and the same side of the file's rectangle [m].
+  /// Bodies: the largest distance between a side of `extent` and the same side of the file's rectangle [m]
+  /// (0 for a sphere or cylinder).
   Real extent_difference = 0;
+  /// Spheres and cylinders: the shape's volume (area in 2D), to compare with the particles' n dp^dim.
+  std::optional<Real> shape_volume;
   /// Clamped solids: the extent of the unclamped particles (+ dp/2 at each end) along the clamp direction
   /// `free_axis` (0: x, 1: y, 2: z) [m], and the same length in the file (free_part of the rectangle).
   std::optional<Real> free_length;
@@ -50,7 +53,8 @@ constexpr std::size_t program_bytes = std::size_t{85} << 20;
 constexpr double max_scene_particles = 1e9;
 
 
-/// The particles build_scene makes for a case, counted from its rectangles without building them:
+/// The particles build_scene makes for a case, counted from its rectangles, spheres and cylinders without
+/// building them:
 /// bodies on the dp lattice, walls with their wall and dummy layers. Wall points that give way to
 /// clamped particles embedded in a wall are counted too (so wall and dummy may be a few too many).
 ParticleCounts count_particles(const CaseSpec& spec);

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """The health of a fluid run, frame by frame (.vtu or .pvtu frames): the largest fluid speed and where it is,
 the 99.9th percentile and the largest fluid pressure, the fluid particles inside a wall (in a `box` wall or
-a `block` of the resolved case, its faces on the lattice, with a margin of 1e-9 m; "-" for a case without walls
+a `block` of the resolved case, its faces on the lattice, or inside a `sphere` or `cylinder` wall, with a margin
+of 1e-9 m; "-" for a case without walls
 or with tank_motion) and the fluid particle count. With bounds it is a check: it exits 1 naming the first frame and quantity that breaks one.
 
 Usage
@@ -38,6 +39,14 @@ def tank_boxes(case):
     dp = float(case["dp"])
     boxes = []
     for w in case.get("walls", []) or []:
+        if w.get("type") == "sphere":
+            s = w["sphere"]
+            boxes.append((np.array(s["centre"], float), None, "sphere", float(s["radius"]), dp))
+            continue
+        if w.get("type") == "cylinder":
+            c = w["cylinder"]
+            boxes.append((np.array(c["base"], float), np.array(c["axis"], float), "cylinder", float(c["radius"]), dp))
+            continue
         r = w["rectangle"]
         lo, hi = np.array(r["min"], float), np.array(r["max"], float)
         cells = np.maximum(1, np.floor((hi - lo) / dp + 0.5))  # std::round: halves away from zero
@@ -55,6 +64,16 @@ def outside(x, boxes):
     eps = 1e-9
     x = x[:, :len(boxes[0][0])]  # 2D frames have z = 0
     for lo, hi, kind, open_top, dp in boxes:
+        if kind == "sphere":  # (centre, -, "sphere", radius, dp)
+            in_wall |= np.linalg.norm(x - lo, axis=1) < open_top - eps
+            continue
+        if kind == "cylinder":  # (base, axis, "cylinder", radius, dp)
+            length = np.linalg.norm(hi)
+            e = hi / length
+            s = (x - lo) @ e
+            rho = np.linalg.norm(x - lo - np.outer(s, e), axis=1)
+            in_wall |= (s > eps) & (s < length - eps) & (rho < open_top - eps)
+            continue
         if kind == "block":
             in_wall |= np.all((x > lo + eps) & (x < hi - eps), axis=1)
             continue

@@ -1,6 +1,7 @@
 // Tests of the case-file parser (io/case_file.cpp): a valid case gives the expected numbers, every
 // kind of bad input gives a CaseError naming file, line, key and expected form, --set overrides,
 // and a fuzz test (mutated case files either parse or throw CaseError, nothing else).
+#include "core/geometry.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
 
@@ -1199,4 +1200,62 @@ TEST(Scene, CoincidentWallParticlesAreRefused) {
   // One of them is fine.
   const CaseSpec one = parse_case(std::string(minimal_case) + "walls:\n  - {name: w0, type: block, rectangle: {min: [0.5, 0.5], max: [0.6, 0.6]}}\n", file_name);
   EXPECT_NO_THROW(build_scene(one, std::nullopt));
+}
+
+// A body may be a disc (`sphere`) or a cylinder's section instead of a rectangle, a wall a solid disc or cylinder;
+// the scene fills them on the lattice (core/geometry.hpp), `rect` holds their bounds, and count_particles
+// counts them exactly.
+TEST(CaseFile, RoundBodiesAndWalls) {
+  const std::string text = replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}",
+                                    "sphere: {centre: [0.2, 0.2], radius: 0.05}") +
+                           "walls:\n  - {name: pile, type: cylinder, cylinder: {base: [0.6, 0.1], axis: [0, 0.3], "
+                           "radius: 0.04}}\n  - {name: ball, type: sphere, sphere: {centre: [0.8, 0.8], radius: 0.1}}\n";
+  const CaseSpec spec = parse_case(text, file_name);
+  ASSERT_TRUE(spec.bodies[0].round);
+  EXPECT_EQ(spec.bodies[0].round->kind, RoundShape::Kind::sphere);
+  EXPECT_DOUBLE_EQ(spec.bodies[0].round->radius, 0.05);
+  EXPECT_NEAR(spec.bodies[0].rect.lo[0], 0.15, 1e-15);
+  EXPECT_NEAR(spec.bodies[0].rect.hi[1], 0.25, 1e-15);
+  ASSERT_EQ(spec.walls.size(), 2u);
+  EXPECT_EQ(spec.walls[0].type, WallType::cylinder);
+  EXPECT_NEAR(spec.walls[0].rect.lo[0], 0.56, 1e-15);
+  EXPECT_NEAR(spec.walls[0].rect.hi[1], 0.4, 1e-15);
+  EXPECT_EQ(spec.walls[1].type, WallType::sphere);
+  const Scene scene = build_scene(spec);
+  const auto& p = scene.particles;
+  EXPECT_EQ(p.n_of_kind(ParticleKind::fluid), fill_sphere(Vec(0.2, 0.2), 0.05, 0.01).size());
+  const std::size_t walls = cylinder_walls(Vec(0.6, 0.1), Vec(0, 0.3), 0.04, 0.01).size() +
+                            sphere_walls(Vec(0.8, 0.8), 0.1, 0.01).size();
+  EXPECT_EQ(p.n_of_kind(ParticleKind::wall) + p.n_of_kind(ParticleKind::dummy), walls);
+  const ParticleCounts n = count_particles(spec);
+  EXPECT_EQ(n.fluid, p.n_of_kind(ParticleKind::fluid));
+  EXPECT_EQ(n.wall, p.n_of_kind(ParticleKind::wall));
+  EXPECT_EQ(n.dummy, p.n_of_kind(ParticleKind::dummy));
+  ASSERT_TRUE(scene.counts[0].shape_volume);
+  EXPECT_NEAR(*scene.counts[0].shape_volume, pi * 0.05 * 0.05, 1e-15);
+}
+
+TEST(CaseFileErrors, RoundShapes) {
+  const std::string two = replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}",
+                                   "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}, sphere: {centre: [0.5, 0.5], radius: 0.1}");
+  EXPECT_THAT(error_of(two), HasSubstr("'rectangle' and 'sphere' given; expected one shape: rectangle, sphere or cylinder"));
+  const std::string bad_radius = replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}",
+                                          "sphere: {centre: [0.2, 0.2], radius: -0.1}");
+  EXPECT_THAT(error_of(bad_radius), HasSubstr("radius = -0.1: expected a positive radius in metres"));
+  const std::string no_axis = replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}",
+                                       "cylinder: {base: [0.2, 0.2], axis: [0, 0], radius: 0.1}");
+  EXPECT_THAT(error_of(no_axis), HasSubstr("axis = [0, 0]: expected a non-zero axis [x, y] in metres"));
+  const std::string outside = replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}",
+                                       "sphere: {centre: [0.95, 0.5], radius: 0.1}");
+  EXPECT_THAT(error_of(outside), HasSubstr("lies outside the domain"));
+  const std::string wall_shape = std::string(minimal_case) +
+                                 "walls:\n  - {name: w, type: sphere, rectangle: {min: [0.5, 0.5], max: [0.6, 0.6]}}\n";
+  EXPECT_THAT(error_of(wall_shape), HasSubstr("missing key 'sphere'"));
+  const std::string box_with_sphere = std::string(minimal_case) +
+      "walls:\n  - {name: w, type: box, rectangle: {min: [0, 0], max: [1, 1]}, sphere: {centre: [0.5, 0.5], radius: 0.1}}\n";
+  EXPECT_THAT(error_of(box_with_sphere), HasSubstr("unknown key 'sphere'"));
+  // A body in the way of a round wall, by the wall's bounds.
+  const std::string overlap = std::string(minimal_case) +
+      "walls:\n  - {name: ball, type: sphere, sphere: {centre: [0.35, 0.2], radius: 0.1}}\n";
+  EXPECT_THAT(error_of(overlap), HasSubstr("bodies must not overlap walls"));
 }

@@ -227,3 +227,74 @@ TEST(Geometry, BlockWallPointsPointOutOfTheBlock) {
   EXPECT_LT((point_at(b, Vec::Constant(0.5 * dp), dp).to_surface - Vec::Constant(-0.5 * dp)).norm(), 1e-12);
   EXPECT_LT((point_at(b, Vec::Constant(1.5 * dp), dp).to_surface - Vec::Constant(-1.5 * dp)).norm(), 1e-12);
 }
+
+// A ball (a disc in 2D) on its lattice: every point within the radius, the count near the volume (area), the
+// lattice's spacing; its wall layers: depth below dp is wall, below 3 dp dummy, deeper points left out, and
+// every offset ends on the sphere along the radius.
+TEST(Geometry, SphereFillAndWalls) {
+  const Real dp = 0.01, r = 0.1;
+  const Vec c = Vec::Constant(0.3);
+  const std::vector<Vec> s = fill_sphere(c, r, dp);
+  const Real volume = dim == 2 ? pi * r * r : 4.0 / 3.0 * pi * r * r * r;
+  EXPECT_NEAR(static_cast<Real>(s.size()) * std::pow(dp, dim), volume, 0.02 * volume);
+  for (const Vec& x : s) EXPECT_LE((x - c).norm(), r + 1e-12);
+  EXPECT_NEAR(min_spacing(s, 2 * dp), dp, 1e-12);
+  const auto w = sphere_walls(c, r, dp);
+  std::size_t n_wall = 0, n_dummy = 0;
+  for (const auto& p : w) {
+    const Real depth = r - (p.x - c).norm();
+    EXPECT_GE(depth, -1e-12);
+    EXPECT_LT(depth, 3 * dp);
+    EXPECT_EQ(p.is_wall, depth < dp) << p.x.transpose();
+    EXPECT_NEAR((p.x + p.to_surface - c).norm(), r, 1e-12);
+    EXPECT_NEAR(p.to_surface.norm(), depth, 1e-12);
+    (p.is_wall ? n_wall : n_dummy) += 1;
+  }
+  // The wall layer is the shell of depth dp: its particles fill the shell's volume (area).
+  const Real shell = dim == 2 ? pi * (r * r - (r - dp) * (r - dp))
+                              : 4.0 / 3.0 * pi * (std::pow(r, 3) - std::pow(r - dp, 3));
+  EXPECT_NEAR(static_cast<Real>(n_wall) * std::pow(dp, dim), shell, 0.1 * shell);
+  EXPECT_GT(n_dummy, n_wall);
+  EXPECT_LT(w.size(), s.size());
+  EXPECT_THROW(fill_sphere(c, 0, dp), std::invalid_argument);
+  EXPECT_THROW(sphere_walls(c, r, -dp), std::invalid_argument);
+}
+
+// A cylinder of wall particles: the depth of a point is its distance to the nearest of the lateral surface and
+// the end faces, and its offset ends on that surface: on the mantle along the radius, on an end face along the
+// axis.
+TEST(Geometry, CylinderWallsFollowTheSurface) {
+  const Real dp = 0.01, r = 0.05, length = 0.2;
+  Vec base = Vec::Constant(0.1), axis = Vec::Zero();
+  axis[dim - 1] = length;
+  const auto w = cylinder_walls(base, axis, r, dp);
+  ASSERT_FALSE(w.empty());
+  const Vec e = axis / length;
+  for (const auto& p : w) {
+    const Real s = (p.x - base).dot(e);
+    const Real rho = (p.x - base - s * e).norm();
+    const Real depth = std::min({r - rho, s, length - s});
+    EXPECT_GE(depth, -1e-12);
+    EXPECT_LT(depth, 3 * dp);
+    EXPECT_EQ(p.is_wall, depth < dp) << p.x.transpose();
+    EXPECT_NEAR(p.to_surface.norm(), depth, 1e-12) << p.x.transpose();
+    const Vec q = p.x + p.to_surface;
+    const Real sq = (q - base).dot(e);
+    const Real rq = (q - base - sq * e).norm();
+    const bool on_surface = std::abs(rq - r) < 1e-12 || std::abs(sq) < 1e-12 || std::abs(sq - length) < 1e-12;
+    EXPECT_TRUE(on_surface) << p.x.transpose();
+  }
+  // The points of a layer in the middle, away from the ends, are those of a ring (in 2D two strips) 3 dp deep.
+  const auto in_middle = [&](const Vec& x) {
+    const Real s = (x - base).dot(e);
+    return s >= 0.5 * length && s < 0.5 * length + dp;
+  };
+  std::size_t n_ring = 0, n_fill = 0;
+  for (const auto& p : w)
+    if (in_middle(p.x)) ++n_ring;
+  for (const Vec& x : fill_cylinder(base, axis, r, dp))
+    if (in_middle(x) && (x - base - (x - base).dot(e) * e).norm() > r - 3 * dp) ++n_fill;
+  EXPECT_GT(n_ring, 0u);
+  EXPECT_EQ(n_ring, n_fill);
+  EXPECT_THROW(cylinder_walls(base, Vec::Zero(), r, dp), std::invalid_argument);
+}

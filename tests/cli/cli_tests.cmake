@@ -51,7 +51,7 @@ if(MPSFSI_WITH_3D)
   add_test(NAME cli_mpi_3d_case_run
            COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|run|${PROJECT_SOURCE_DIR}/cases/3d/hydrostatic.yaml|--overwrite|--output|${runs3d}/hydrostatic_np2|--end-time|0.01"
                    -DCODE=0 "-DREGEX=\\(3D\\): case hydrostatic_3d \\([0-9]+ particles\\)" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
-  set_tests_properties(cli_mpi_3d_case_run PROPERTIES LABELS mpi)
+  set_tests_properties(cli_mpi_3d_case_run PROPERTIES LABELS mpi PROCESSORS 2)
 else()
   foreach(f IN LISTS cases_3d)
     get_filename_component(n ${f} NAME_WE)
@@ -65,17 +65,17 @@ endif()
 add_test(NAME cli_mpi_input_error_printed_once
          COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml|--set|dp=0"
                  -DCODE=2 "-DREGEX=dp = 0: expected a positive number" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
-set_tests_properties(cli_mpi_input_error_printed_once PROPERTIES LABELS mpi)
+set_tests_properties(cli_mpi_input_error_printed_once PROPERTIES LABELS mpi PROCESSORS 2)
 # Under mpirun `check` reports once (rank 0's report).
 add_test(NAME cli_mpi_check_reports_once
          COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml"
                  -DCODE=0 "-DREGEX=case OK" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
-set_tests_properties(cli_mpi_check_reports_once PROPERTIES LABELS mpi)
+set_tests_properties(cli_mpi_check_reports_once PROPERTIES LABELS mpi PROCESSORS 2)
 # All ranks take the same decision on the memory (the smallest MemAvailable of any rank): one message, exit 2.
 add_test(NAME cli_mpi_memory_refused_on_every_rank
          COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|check|${PROJECT_SOURCE_DIR}/cases/dam_break.yaml|--dp|1e-5"
                  -DCODE=2 "-DREGEX=dp = 1e-05: the case would have" -DONCE=1 -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
-set_tests_properties(cli_mpi_memory_refused_on_every_rank PROPERTIES LABELS mpi)
+set_tests_properties(cli_mpi_memory_refused_on_every_rank PROPERTIES LABELS mpi PROCESSORS 2)
 
 # Failure handling (issue 7): each kind is provoked and must give its diagnosis and a non-zero exit.
 set(db ${PROJECT_SOURCE_DIR}/cases/dam_break.yaml)
@@ -98,7 +98,7 @@ mpsfsi_cli_test(fluid_lost_stops_the_run 3 "of fluid body 'water' have left the 
 add_test(NAME cli_mpi_fluid_lost_stops_the_run
          COMMAND ${CMAKE_COMMAND} "-DCMD=${MPIEXEC_EXECUTABLE}|--allow-run-as-root|--oversubscribe|${MPIEXEC_NUMPROC_FLAG}|2|$<TARGET_FILE:mpsfsi>|run|${PROJECT_SOURCE_DIR}/cases/hydrostatic.yaml|--quiet|--overwrite|--output|${run_dir}/lost_mpi|--end-time|0.35|--set|gravity=[0,9.81]|--set|domain={min: [-0.05, -0.05], max: [0.25, 0.32]}"
                  -DCODE=3 "-DREGEX=more than fluid.max_loss = 5 %" -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/expect.cmake)
-set_tests_properties(cli_mpi_fluid_lost_stops_the_run PROPERTIES LABELS mpi)
+set_tests_properties(cli_mpi_fluid_lost_stops_the_run PROPERTIES LABELS mpi PROCESSORS 2)
 # A huge dt_max: the first step is limited by the gravity (acceleration), the water stays in the tank.
 mpsfsi_cli_test(huge_dt_max_first_step_limited_by_gravity 0 "dt 9.03e-03 s \\(acceleration\\)"
   run ${db} --overwrite --output ${run_dir}/huge_dt_max --end-time 0.01 --set time.dt_max=1e10)
