@@ -1,5 +1,6 @@
-// Small collectives over an MPI communicator that several modules need: one message agreed by all ranks (the
-// lowest rank's finding) and an all-gather of variable-length arrays of numbers (double or int64).
+// Small collectives over an MPI communicator that several modules need: this rank's number and the rank count,
+// one message agreed by all ranks (the lowest rank's finding) and an all-gather of variable-length arrays of
+// numbers (double or int64).
 #pragma once
 
 #include <mpi.h>
@@ -9,6 +10,20 @@
 #include <vector>
 
 namespace mpsfsi {
+
+/// This process's rank in `comm`.
+inline int rank_of(MPI_Comm comm) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  return rank;
+}
+
+/// The number of ranks of `comm`.
+inline int size_of(MPI_Comm comm) {
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  return size;
+}
 
 /// The lowest rank whose `local` message is not empty hands it to every rank; empty if no rank has one.
 /// A collective.

@@ -4,6 +4,7 @@
 #include "core/files.hpp"
 #include "core/output_lock.hpp"
 #include "core/stopwatch.hpp"
+#include "core/collectives.hpp"
 #include "coupling/rank0.hpp"
 
 #include <fmt/format.h>
@@ -14,22 +15,6 @@
 #include <filesystem>
 
 namespace mpsfsi {
-
-namespace {
-
-int rank_of(MPI_Comm comm) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  return rank;
-}
-
-int size_of(MPI_Comm comm) {
-  int size = 1;
-  MPI_Comm_size(comm, &size);
-  return size;
-}
-
-}  // namespace
 
 bool appends(const RunSettings& settings, const std::string& file) {
   return std::find(settings.append_files.begin(), settings.append_files.end(), file) != settings.append_files.end();

@@ -15,6 +15,7 @@
 #include "coupling/checkpoint.hpp"
 #include "coupling/coupling_scheme.hpp"
 #include "coupling/fsi_interface.hpp"
+#include "core/collectives.hpp"
 #include "coupling/rank0.hpp"
 #include "coupling/run_log.hpp"
 #include "coupling/run_output.hpp"
@@ -40,12 +41,6 @@
 namespace mpsfsi {
 
 namespace {
-
-int size_of(MPI_Comm comm) {
-  int size = 1;
-  MPI_Comm_size(comm, &size);
-  return size;
-}
 
 long peak_memory_kib() {
   rusage u{};

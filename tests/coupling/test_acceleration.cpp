@@ -19,17 +19,6 @@ using namespace mpsfsi;
 
 namespace {
 
-int rank_of(MPI_Comm comm) {
-  int r = 0;
-  MPI_Comm_rank(comm, &r);
-  return r;
-}
-int size_of(MPI_Comm comm) {
-  int s = 1;
-  MPI_Comm_size(comm, &s);
-  return s;
-}
-
 /// H(x) = A x + b on n values, rank r of R holding the ids [r n / R, (r + 1) n / R).
 struct LinearMap {
   Eigen::MatrixXd a;
