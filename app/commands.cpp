@@ -84,12 +84,12 @@ int command_check(const RunOptions& opts) {
     const BodyCount& c = scene.counts[k];
     std::string line = fmt::format("  {:<20} {}", c.name, show_rect(c.extent));
     if (c.shape_volume)
-      line += fmt::format("; {} particles fill {:.6g} m{} against the {}'s {:.6g} ({:+.2f} %)", c.n_particles,
-                          static_cast<double>(c.n_particles) * std::pow(spec.dp, dim), dim == 2 ? "2" : "3",
-                          spec.bodies[k].round->kind == RoundShape::Kind::sphere ? (dim == 2 ? "disc" : "sphere")
-                                                                                  : "cylinder",
+      line += fmt::format("; {} particles fill {:.6g} m{} against the {}'s {:.6g} ({:+.2f} %{})", c.n_particles,
+                          static_cast<double>(c.n_particles) * std::pow(spec.dp, dim), dim == 2 ? "2" : "3", c.shape,
                           *c.shape_volume,
-                          100 * (static_cast<double>(c.n_particles) * std::pow(spec.dp, dim) / *c.shape_volume - 1));
+                          100 * (static_cast<double>(c.n_particles) * std::pow(spec.dp, dim) / *c.shape_volume - 1),
+                          spec.bodies[k].subtract.empty() ? "" : ", less what is cut out");
+    if (c.shape_bounds) line += fmt::format("; the {}'s bounds {} ({})", c.shape, show_rect(*c.shape_bounds), c.shape_source);
     if (c.free_length)
       line += fmt::format("; free length {:.6g} m along {} (file: {:.6g} m)", *c.free_length, "xyz"[c.free_axis],
                           c.file_free_length);
@@ -100,6 +100,12 @@ int command_check(const RunOptions& opts) {
                                      "per side; sides that are multiples of dp = {:g} m are exact)",
                                      c.name, show_rect(c.extent), show_rect(spec.bodies[k].rect), c.extent_difference,
                                      0.25 * spec.dp, spec.dp));
+  }
+  for (std::size_t k = spec.bodies.size(); k < scene.counts.size(); ++k) {
+    const BodyCount& c = scene.counts[k];
+    if (!c.shape_bounds) continue;
+    fmt::print("  wall {}: a {} ({}), bounds {}, {} {:.6g} m{}\n", c.name, c.shape, c.shape_source,
+               show_rect(*c.shape_bounds), dim == 2 ? "area" : "volume", *c.shape_volume, dim == 2 ? "2" : "3");
   }
   for (const auto& w : warnings) fmt::print("{}\n", w);
   const double mib = static_cast<double>(estimate_memory_bytes(spec, scene)) / (1024.0 * 1024.0);

@@ -1,6 +1,6 @@
 // Lattice geometry in MPSFSI_DIM dimensions: filled rectangles / boxes, spheres and cylinders; box walls, and
 // blocks, spheres and cylinders of wall particles (seed 004 §4.3). Every builder walks the lattice cells with
-// axis 0 fastest (row by row in 2D).
+// axis 0 fastest (row by row in 2D). Regions given by a signed distance are filled and walled on the same lattice.
 #include "core/geometry.hpp"
 
 #include <algorithm>
@@ -261,6 +261,134 @@ std::vector<WallPoint> block_walls(const Vec& lo, const Vec& hi, const Real dp, 
     pts.push_back({x, depth == 0, to_surface});
   });
   return pts;
+}
+
+
+SignedDistance box_distance(const Vec& lo, const Vec& hi) {
+  return [lo, hi](const Vec& x, Vec& nearest) -> Real {
+    nearest = x.cwiseMax(lo).cwiseMin(hi);
+    if (nearest != x) return (x - nearest).norm();
+    // Inside or on the surface: the nearest face (a point on a face is at distance 0, which is not negative).
+    int axis = 0;
+    bool upper = false;
+    Real depth = x[0] - lo[0];
+    for (int a = 0; a < dim; ++a)
+      for (const bool u : {false, true}) {
+        const Real d = u ? hi[a] - x[a] : x[a] - lo[a];
+        if (d < depth) depth = d, axis = a, upper = u;
+      }
+    nearest[axis] = upper ? hi[axis] : lo[axis];
+    return depth > 0 ? -depth : Real(0);
+  };
+}
+
+SignedDistance sphere_distance(const Vec& centre_point, const Real radius) {
+  return [centre_point, radius](const Vec& x, Vec& nearest) -> Real {
+    const Vec r = x - centre_point;
+    const Real rho = r.norm();
+    nearest = centre_point + radius * (rho > 0 ? Vec(r / rho) : Vec(Vec::Unit(dim - 1)));
+    return rho - radius;
+  };
+}
+
+SignedDistance cylinder_distance(const Vec& base, const Vec& axis, const Real radius) {
+  const Real length = axis.norm();
+  const Vec e = axis / length;
+  return [base, e, length, radius](const Vec& x, Vec& nearest) -> Real {
+    const Real s = (x - base).dot(e);
+    const Vec r = x - base - s * e;
+    const Real rho = r.norm();
+    const Vec u = rho > 0 ? Vec(r / rho) : normal_to(e);
+    const Real radial = rho - radius, axial = std::max(-s, s - length);
+    if (radial <= 0 && axial <= 0) {  // inside or on the surface: the nearest of the mantle and the end faces
+      if (radial >= axial) nearest = base + s * e + radius * u;
+      else nearest = base + (-s > s - length ? Real(0) : length) * e + r;
+      return std::max(radial, axial);
+    }
+    nearest = base + std::clamp(s, Real(0), length) * e + std::min(rho, radius) * u;
+    return (x - nearest).norm();
+  };
+}
+
+IVec region_cells(const Vec& lo, const Vec& hi, const Real dp) {
+  if (!(dp > 0)) throw std::invalid_argument("lattice: dp must be positive");
+  IVec n;
+  for (int a = 0; a < dim; ++a) {
+    const double c = (hi[a] - lo[a]) / dp;
+    if (!(c > 0)) throw std::invalid_argument("lattice: a region's bounding box must have a positive size");
+    const double whole = std::round(c);
+    const double k = std::abs(c - whole) <= 1e-9 * std::max(1.0, whole) ? whole : std::ceil(c);
+    if (k > 1e8) throw std::invalid_argument("lattice: too many particles along one side");
+    n[a] = std::max(1, static_cast<int>(k));
+  }
+  return n;
+}
+
+std::vector<Vec> fill_region(const Vec& lo, const Vec& hi, const Real dp, const SignedDistance& distance) {
+  std::vector<Vec> points;
+  Vec nearest;
+  const Real on_surface = surface_tolerance * dp;
+  for_each_cell(IVec::Zero(), region_cells(lo, hi, dp) - IVec::Ones(), [&](const IVec& i) {
+    const Vec x = centre(lo, i, dp);
+    if (distance(x, nearest) < -on_surface) points.push_back(x);
+  });
+  return points;
+}
+
+std::vector<WallPoint> region_walls(const Vec& lo, const Vec& hi, const Real dp, const SignedDistance& distance,
+                                    const bool fluid_inside, const bool open_top, const int n_dummy) {
+  const IVec n = region_cells(lo, hi, dp);
+  const int n_layers = 1 + n_dummy;
+  const IVec first = IVec::Constant(fluid_inside ? -n_layers : 0);
+  IVec last = n - IVec::Ones() + IVec::Constant(fluid_inside ? n_layers : 0);
+  if (fluid_inside && open_top) last[dim - 1] = n[dim - 1] - 1;
+  IVec extent = last - first + IVec::Ones();
+  std::size_t stride[dim], total = 1;
+  for (int a = 0; a < dim; ++a) stride[a] = total, total *= static_cast<std::size_t>(extent[a]);
+  const auto index = [&](const IVec& i) {
+    std::size_t k = 0;
+    for (int a = 0; a < dim; ++a) k += static_cast<std::size_t>(i[a] - first[a]) * stride[a];
+    return k;
+  };
+  // Layer of every point: 0 on the fluid's side, -1 not yet known, else its distance in cells from that side.
+  std::vector<signed char> layer(total);
+  std::vector<Vec> nearest(total);
+  const Real on_surface = surface_tolerance * dp;
+  for_each_cell(first, last, [&](const IVec& i) {
+    const std::size_t k = index(i);
+    const Real d = distance(centre(lo, i, dp), nearest[k]);
+    layer[k] = (fluid_inside ? d > on_surface : d < -on_surface) ? -1 : 0;
+  });
+  // Outside the lattice: the fluid's side around an obstacle, the wall's side (or the open top) around a container.
+  const signed char beyond = fluid_inside ? -1 : 0;
+  constexpr int n_near = dim == 2 ? 9 : 27;
+  for (int l = 1; l <= n_layers; ++l) {
+    for_each_cell(first, last, [&](const IVec& i) {
+      const std::size_t k = index(i);
+      if (layer[k] != -1) return;
+      for (int m = 0; m < n_near; ++m) {
+        IVec j = i;
+        bool inside = true;
+        for (int a = 0, q = m; a < dim; ++a, q /= 3) {
+          j[a] += q % 3 - 1;
+          inside = inside && j[a] >= first[a] && j[a] <= last[a];
+        }
+        const signed char lj = inside ? layer[index(j)] : beyond;
+        if (lj == l - 1) {
+          layer[k] = static_cast<signed char>(l);
+          return;
+        }
+      }
+    });
+  }
+  std::vector<WallPoint> points;
+  for_each_cell(first, last, [&](const IVec& i) {
+    const std::size_t k = index(i);
+    if (layer[k] < 1) return;
+    const Vec x = centre(lo, i, dp);
+    points.push_back({x, layer[k] == 1, nearest[k] - x});
+  });
+  return points;
 }
 
 }  // namespace mpsfsi

@@ -1,12 +1,14 @@
 // Particle geometry on a lattice of spacing dp (square in 2D, simple cubic in 3D): filled rectangles
 // (boxes in 3D), spheres and cylinders; box walls, and blocks, spheres and cylinders made of one wall layer plus
-// dummy layers (seed 004 §4.3). A rectangle of n x m (x l) cells of side dp gets one particle at the centre of
+// dummy layers (seed 004 §4.3), and any region given by its signed distance (a surface read from a file: io/surface.hpp)
+// filled, or made into walls, on the same lattice. A rectangle of n x m (x l) cells of side dp gets one particle at the centre of
 // each cell, so bodies that touch along a face sit exactly dp apart and never overlap. "Rectangle" below means the axis-aligned
 // box [lo, hi] in the build's dimension.
 #pragma once
 
 #include "core/types.hpp"
 
+#include <functional>
 #include <vector>
 
 namespace mpsfsi {
@@ -87,5 +89,40 @@ struct RoundCount {
 };
 RoundCount count_sphere(const Vec& centre, Real radius, Real dp, int n_dummy = 2);
 RoundCount count_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp, int n_dummy = 2);
+
+
+/// A region given by its signed distance: negative inside, positive outside, and in `nearest` the nearest point
+/// of its surface.
+using SignedDistance = std::function<Real(const Vec& x, Vec& nearest)>;
+
+/// The signed distances of a box [lo, hi], a ball and a cylinder (as in fill_cylinder; in 2D its section, a strip):
+/// the shapes of block, sphere and cylinder walls, for bodies that are cut by them.
+SignedDistance box_distance(const Vec& lo, const Vec& hi);
+SignedDistance sphere_distance(const Vec& centre, Real radius);
+SignedDistance cylinder_distance(const Vec& base, const Vec& axis, Real radius);
+
+/// Cells per axis of a region's lattice in its bounding box [lo, hi]: ceil(side / dp) (within 1e-9 of a whole
+/// number: that number), at least 1, so that the lattice covers the box (a rectangle's side is rounded instead).
+IVec region_cells(const Vec& lo, const Vec& hi, Real dp);
+
+/// A lattice point within surface_tolerance dp of a region's surface is on it, whatever the sign of its distance's
+/// round-off: it counts as outside (on the fluid's side of a wall).
+inline constexpr Real surface_tolerance = 1e-9;
+
+/// Particle centres filling a region: the points lo + (i + 1/2 [, ...]) dp, i_a < region_cells, of the lattice
+/// anchored at the low corner lo of its bounding box whose signed distance is negative (a point on the surface is
+/// outside). For a box [lo, hi] with whole cells these are fill_rectangle's points, in its order; a side that is no
+/// whole number of cells ends at the surface (a rectangle's side is rounded to whole cells instead).
+std::vector<Vec> fill_region(const Vec& lo, const Vec& hi, Real dp, const SignedDistance& distance);
+
+/// Walls of a region on the lattice of fill_region. With `fluid_inside` false the region is a solid obstacle: its
+/// wall and dummy layers lie inside the surface; with true it is a container (a tank): they lie outside, on the
+/// lattice extended by 1 + n_dummy cells on each side, and with open_top none above the bounding box (the last
+/// axis). A point's layer is its distance in cells (the largest over the axes) from the nearest lattice point on
+/// the fluid's side (a point on the surface is on the fluid's side): 1 is the wall layer, 2 to 1 + n_dummy the
+/// dummy layers, deeper points are left out. So a box container is box_walls and a box obstacle block_walls, point
+/// for point and in their order. to_surface is the offset to the nearest surface point.
+std::vector<WallPoint> region_walls(const Vec& lo, const Vec& hi, Real dp, const SignedDistance& distance,
+                                    bool fluid_inside, bool open_top, int n_dummy = 2);
 
 }  // namespace mpsfsi

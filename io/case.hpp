@@ -14,6 +14,7 @@
 #include "fluid/fluid_parameters.hpp"
 #include "solid/solid_parameters.hpp"
 
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -28,6 +29,8 @@ class CaseError : public std::runtime_error {
 };
 
 enum class BodyKind { fluid, solid };
+
+class ClosedSurface;  // io/surface.hpp
 
 /// A body or wall that is not a rectangle: a ball (`sphere`: centre and radius; a disc in 2D) or a cylinder
 /// (`cylinder`: the centre of its base, the axis from there to the other end, and the radius; in 2D its section
@@ -48,6 +51,11 @@ struct BodySpec {
   std::string material;             ///< name of a fluid material (fluid) or solid material (solid)
   Rect rect;                        ///< region filled with particles; with `round` the shape's bounds
   std::optional<RoundShape> round;  ///< a sphere or cylinder filled with particles instead of the rectangle
+  /// A closed surface (an STL or OBJ file in 3D, a polygon in 2D) filled instead of the rectangle; rect: its bounds.
+  std::shared_ptr<const ClosedSurface> surface;
+  /// Walls whose shapes are cut out of the body (`subtract`): its lattice points inside them or closer than dp/2 to
+  /// their surface are left out, so that water can surround an obstacle.
+  std::vector<std::string> subtract;
   std::optional<Rect> clamp;        ///< solid only: particles inside are clamped
   Vec velocity = Vec::Zero();       ///< initial velocity [m/s]
   Angular angular_velocity = angular_zero();       ///< initial angular velocity about the body's centroid [rad/s] (a vector in 3D)
@@ -59,15 +67,20 @@ struct BodySpec {
 Rect free_part(const BodySpec& b);
 
 /// A box (a tank: the wall outside its inner rectangle) or a solid obstacle of wall particles: a block, a
-/// sphere or a cylinder (the wall layer and the dummy layers inside its surface).
-enum class WallType { box, block, sphere, cylinder };
+/// sphere or a cylinder (the wall layer and the dummy layers inside its surface); or a closed surface (`surface`
+/// in 3D, `polygon` in 2D) with the fluid outside it (an obstacle) or inside it (a container).
+enum class WallType { box, block, sphere, cylinder, surface };
 
 struct WallSpec {
   std::string name;
   WallType type = WallType::box;
   Rect rect;              ///< box: the inner (wetted) rectangle; block: the solid block itself; sphere, cylinder: the bounds
-  bool open_top = true;   ///< box only: no lid
+  bool open_top = true;   ///< box (default true), surface with the fluid inside (default false): no lid
   std::optional<RoundShape> round;  ///< sphere, cylinder: the shape
+  std::shared_ptr<const ClosedSurface> surface;  ///< surface: the shape
+  bool fluid_inside = false;  ///< surface: a container (the layers outside the surface) instead of an obstacle
+  /// A tank: the fluid is inside it (a box, or a surface with the fluid inside).
+  bool is_container() const { return type == WallType::box || (type == WallType::surface && fluid_inside); }
 };
 
 enum class ProbeType { pressure, surge_front, column_height, displacement };

@@ -9,6 +9,7 @@
 // reports every key that was not asked for as unknown. Cross-checks (materials, names, overlaps)
 // follow the reading.
 #include "io/case.hpp"
+#include "io/surface.hpp"
 
 #include "core/tank_motion.hpp"
 
@@ -785,35 +786,106 @@ RoundShape read_round(MapReader& r, const std::string& key) {
   return s;
 }
 
+/// A file named in the case: an absolute path, or relative to the case file's directory.
+fs::path resolve(const fs::path& base_dir, const std::string& file) {
+  return fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
+}
+
+/// The key of a body or wall given by a closed surface: an STL or OBJ file in 3D, a polygon in 2D.
+const std::string surface_key = dim == 2 ? "polygon" : "surface";
+const std::string surface_form =
+    dim == 2 ? "a polygon {points: [[x, y], ...] or file: a text file of x y lines (relative to the case file), scale: "
+               "s or [sx, sy], rotate: degrees, translate: [x, y]} in metres (scaled, rotated about the origin, then "
+               "translated)"
+             : "a surface {file: an STL or OBJ file (relative to the case file), scale: s or [sx, sy, sz], rotate: "
+               "[rx, ry, rz] degrees about x, then y, then z, translate: [x, y, z]} in metres (scaled, rotated about the "
+               "origin, then translated)";
+
+/// The closed surface under surface_key of r, read, transformed and checked (io/surface.hpp).
+std::shared_ptr<const ClosedSurface> read_surface(MapReader& r, const fs::path& base_dir) {
+  const Source& src = r.source();
+  const Field field = r.required(surface_key, surface_form);
+  MapReader m(src, field, surface_form);
+  SurfaceTransform t;
+  if (const auto f = m.optional("scale")) {
+    const std::string form = "a positive scale factor s or " + components() + " of positive factors";
+    if (is_plain_scalar(f->node)) t.scale = Vec::Constant(to_real(src, *f, positive, form));
+    else t.scale = to_vec(src, *f, form);
+    if (!(t.scale.array() > 0).all()) src.expected(*f, form);
+  }
+#if MPSFSI_DIM == 2
+  t.rotate_deg[0] = m.number("rotate", 0, any_number, "an angle in degrees (counter-clockwise about the origin)");
+#else
+  t.rotate_deg = m.vec("rotate", Vec::Zero(), "angles [rx, ry, rz] in degrees (about x, then y, then z)");
+#endif
+  t.translate = m.vec("translate", Vec::Zero(), "a translation " + components() + " in metres");
+  const bool has_points = dim == 2 && m.has("points");
+  const bool has_file = m.has("file");
+  if (!has_points && !has_file) m.finish();  // an unknown key (e.g. a 2D polygon's points in 3D) said first
+  if (has_points == has_file)
+    src.fail(field, fmt::format("{}: {}; expected {}", field.path,
+                                has_file ? "both points and file given" : dim == 2 ? "neither points nor file given" : "no file given",
+                                surface_form));
+  try {
+    std::shared_ptr<const ClosedSurface> surface;
+    if (has_points) {
+      std::vector<Vec> points;
+      for (const Field& item : m.list("points", "a list of points [[x, y], ...] in metres", true))
+        points.push_back(to_vec(src, item, "a point [x, y] in metres"));
+      m.finish();
+      surface = ClosedSurface::from_polygon(std::move(points), t);
+    } else {
+      const std::string file = m.text("file", "the path of " + std::string(dim == 2 ? "a text file of x y lines" : "an STL or OBJ file") +
+                                                  ", relative to the case file");
+      m.finish();
+      surface = ClosedSurface::from_file(resolve(base_dir, file).string(), t);
+    }
+    return surface;
+  } catch (const SurfaceError& e) {
+    src.fail(field, fmt::format("{}: {}", field.path, e.what()));
+  }
+}
+
 /// Fields of the bodies and walls kept for the cross-checks.
 struct GeometryFields {
-  std::vector<Field> body_rect, body_material, body_clamp, wall_rect;
+  std::vector<Field> body_rect, body_material, body_clamp, body_subtract, wall_rect;
 };
 
-void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g) {
+const std::string body_shapes = "rectangle | sphere | cylinder | " + surface_key;
+
+void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g,
+                 const fs::path& base_dir) {
   const Source& src = top.source();
-  const std::string form = "a list of bodies, each {name, kind: fluid | solid, material, rectangle | sphere | cylinder, ...}";
+  const std::string form = "a list of bodies, each {name, kind: fluid | solid, material, " + body_shapes + ", ...}";
   for (const Field& item : top.list("bodies", form, true)) {
-    MapReader r(src, item, "a body {name, kind: fluid | solid, material, rectangle | sphere | cylinder, ...}");
+    MapReader r(src, item, "a body {name, kind: fluid | solid, material, " + body_shapes + ", subtract, ...}");
     BodySpec b;
     b.name = unique_name(r, names, "bodies and walls");
     b.kind = r.choice("kind", {"fluid", "solid"}) == "solid" ? BodyKind::solid : BodyKind::fluid;
     b.material = r.name("material", "the name of a material of the body's kind");
-    // The shape: a rectangle, a sphere or a cylinder, exactly one.
+    // The shape: a rectangle, a sphere, a cylinder or a closed surface, exactly one.
     std::string shape;
-    for (const char* key : {"rectangle", "sphere", "cylinder"}) {
+    for (const std::string& key : {std::string("rectangle"), std::string("sphere"), std::string("cylinder"), surface_key}) {
       if (!r.has(key)) continue;
       if (!shape.empty())
-        src.fail(r.at(key), fmt::format("{}: '{}' and '{}' given; expected one shape: rectangle, sphere or cylinder",
-                                        item.path.empty() ? "body" : item.path, shape, key));
+        src.fail(r.at(key), fmt::format("{}: '{}' and '{}' given; expected one shape: rectangle, sphere, cylinder or {}",
+                                        item.path.empty() ? "body" : item.path, shape, key, surface_key));
       shape = key;
     }
     if (shape.empty() || shape == "rectangle") {
-      b.rect = r.rect("rectangle", rect_form + " filled with particles (or a sphere or cylinder instead)");
+      b.rect = r.rect("rectangle", rect_form + " filled with particles (or a sphere, cylinder or " + surface_key + " instead)");
+    } else if (shape == surface_key) {
+      b.surface = read_surface(r, base_dir);
+      b.rect = b.surface->bounds();
     } else {
       b.round = read_round(r, shape);
       b.rect = b.round->bounds();
     }
+    for (const Field& name : r.list("subtract", "a list of names of walls (blocks, spheres, cylinders, or surfaces with "
+                                                "the fluid outside) cut out of the body",
+                                    false))
+      b.subtract.push_back(to_name(src, name, "the name of a wall"));
+    g.body_subtract.push_back(r.at("subtract"));
     b.clamp = r.optional_rect("clamp", rect_form + " (solid bodies: particles inside are clamped)");
     b.velocity = r.vec("velocity", Vec::Zero(), "an initial velocity " + components("v") + " in m/s");
     if (!(b.velocity.norm() <= max_speed))
@@ -839,45 +911,62 @@ void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::stri
   }
 }
 
-void read_walls(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g) {
+void read_walls(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g,
+                const fs::path& base_dir) {
   const Source& src = top.source();
-  for (const Field& item : top.list("walls", "a list of walls, each {name, type: box | block | sphere | cylinder, ...}",
-                                    false)) {
-    MapReader r(src, item, "a wall {name, type: box | block | sphere | cylinder, rectangle | sphere | cylinder, open_top}");
+  const std::string types = "box | block | sphere | cylinder | " + surface_key;
+  for (const Field& item : top.list("walls", "a list of walls, each {name, type: " + types + ", ...}", false)) {
+    MapReader r(src, item, "a wall {name, type: " + types + ", rectangle | sphere | cylinder | " + surface_key +
+                               ", fluid, open_top}");
     WallSpec w;
     w.name = unique_name(r, names, "bodies and walls");
-    const std::string type = r.choice("type", {"box", "block", "sphere", "cylinder"});
+    const std::string type = r.choice("type", {"box", "block", "sphere", "cylinder", surface_key});
     w.type = type == "box" ? WallType::box : type == "block" ? WallType::block
-           : type == "sphere" ? WallType::sphere : WallType::cylinder;
+           : type == "sphere" ? WallType::sphere : type == "cylinder" ? WallType::cylinder : WallType::surface;
     const bool round = w.type == WallType::sphere || w.type == WallType::cylinder;
     if (round) {
       w.round = read_round(r, type);
       w.rect = w.round->bounds();
+    } else if (w.type == WallType::surface) {
+      w.surface = read_surface(r, base_dir);
+      w.rect = w.surface->bounds();
+      w.fluid_inside = r.choice("fluid", "outside", {"outside", "inside"}) == "inside";
     } else {
       w.rect = r.rect("rectangle", rect_form + (w.type == WallType::box ? " (inner, wetted side of the box)" : " (the block)"));
     }
     if (w.type == WallType::box) w.open_top = r.boolean("open_top", true, "true or false (box without a lid)");
+    if (w.type == WallType::surface && w.fluid_inside)
+      w.open_top = r.boolean("open_top", false, "true or false (no wall layers above the surface's top: a tank without a lid)");
+    else if (w.type == WallType::surface)
+      w.open_top = false;
     r.finish();
-    g.wall_rect.push_back(r.at(round ? type : "rectangle"));
+    g.wall_rect.push_back(r.at(round || w.type == WallType::surface ? type : "rectangle"));
     spec.walls.push_back(w);
   }
 }
 
-bool inside(const Rect& inner, const Rect& outer) {
-  return (inner.lo.array() >= outer.lo.array()).all() && (inner.hi.array() <= outer.hi.array()).all();
+/// inner lies in outer, to `tolerance` (a rotated surface's bounds carry round-off: cos 90 degrees is 6e-17).
+bool inside(const Rect& inner, const Rect& outer, const Real tolerance = 0) {
+  return (inner.lo.array() >= outer.lo.array() - tolerance).all() && (inner.hi.array() <= outer.hi.array() + tolerance).all();
 }
 
 /// Inside a box: within its inner rectangle; an open box does not bound the top.
-bool inside_box(const Rect& r, const WallSpec& box) {
+bool inside_box(const Rect& r, const WallSpec& box, const Real tolerance) {
   Rect bound = box.rect;
   if (box.open_top) bound.hi[dim - 1] = std::numeric_limits<Real>::infinity();
-  return inside(r, bound);
+  return inside(r, bound, tolerance);
+}
+
+/// The interiors of a and b intersect by more than `tolerance` along every axis.
+bool overlap_beyond(const Rect& a, const Rect& b, const Real tolerance) {
+  return (a.lo.array() < b.hi.array() - tolerance).all() && (b.lo.array() < a.hi.array() - tolerance).all();
 }
 
 /// Every rectangle is inside the domain and at least one particle (dp/2) thick; bodies do not overlap
 /// each other or a block and lie in a box when there is one (a clamped end may reach into a wall);
 /// clamps touch their body.
 void check_geometry(const Source& src, const CaseSpec& spec, const GeometryFields& g, const Field& dp_field) {
+  const Real tolerance = 1e-9 * spec.dp;
   const auto check_size = [&](const Rect& r, const Field& f) {
     const Vec size = r.size();
     if (size.minCoeff() < 0.5 * spec.dp)
@@ -886,7 +975,7 @@ void check_geometry(const Source& src, const CaseSpec& spec, const GeometryField
     if (size.maxCoeff() > max_cells_per_side * spec.dp)
       src.fail(f, fmt::format("{} = {}: expected at most {:g} particles along a side (dp = {:g} m)", f.path, show_rect(r),
                               max_cells_per_side, spec.dp));
-    if (!inside(r, spec.domain))
+    if (!inside(r, spec.domain, tolerance))
       src.fail(f, fmt::format("{} = {} lies outside the domain {}: expected a rectangle inside the domain", f.path,
                               show_rect(r), show_rect(spec.domain)));
   };
@@ -904,18 +993,31 @@ void check_geometry(const Source& src, const CaseSpec& spec, const GeometryField
     const BodySpec& b = spec.bodies[i];
     const Field& f = g.body_rect[i];
     for (std::size_t j = 0; j < i; ++j)
-      if (overlaps(b.rect, spec.bodies[j].rect))
+      if (overlap_beyond(b.rect, spec.bodies[j].rect, tolerance))
         src.fail(f, fmt::format("{} overlaps {} ('{}'): bodies must not overlap", f.path, g.body_rect[j].path,
                                 spec.bodies[j].name));
     const WallSpec* first_box = nullptr;
     bool in_a_box = false;
+    for (const std::string& name : b.subtract) {
+      const auto it = std::find_if(spec.walls.begin(), spec.walls.end(), [&](const WallSpec& w) { return w.name == name; });
+      const Field& sf = g.body_subtract[i];
+      if (it == spec.walls.end())
+        src.fail(sf, fmt::format("{}: '{}' is not a wall of the case; expected names of walls", sf.path, name));
+      if (it->is_container())
+        src.fail(sf, fmt::format("{}: '{}' is a tank (the fluid is inside it); expected obstacles: blocks, spheres, "
+                                 "cylinders or {}s with the fluid outside",
+                                 sf.path, name, surface_key));
+    }
     for (std::size_t k = 0; k < spec.walls.size(); ++k) {
       const WallSpec& w = spec.walls[k];
-      if (w.type != WallType::box && overlaps(free_part(b), w.rect))  // a sphere or cylinder by its bounds
-        src.fail(f, fmt::format("{} overlaps {} ('{}'): bodies must not overlap walls", f.path, g.wall_rect[k].path, w.name));
-      if (w.type == WallType::box) {
+      const bool cut_out = std::find(b.subtract.begin(), b.subtract.end(), w.name) != b.subtract.end();
+      if (!w.is_container() && !cut_out && overlap_beyond(free_part(b), w.rect, tolerance))  // a sphere, cylinder or surface by its bounds
+        src.fail(f, fmt::format("{} overlaps {} ('{}'): bodies must not overlap walls (or list the wall in the body's "
+                                "subtract)",
+                                f.path, g.wall_rect[k].path, w.name));
+      if (w.is_container()) {
         if (!first_box) first_box = &w;
-        in_a_box = in_a_box || inside_box(free_part(b), w);
+        in_a_box = in_a_box || inside_box(free_part(b), w, tolerance);
       }
     }
     if (first_box && !in_a_box) {
@@ -963,11 +1065,6 @@ TimeTable read_table(const Source& src, const Field& f, const fs::path& path, co
   } catch (const TableError& e) {
     src.fail(f, fmt::format("{} = {}: {}", f.path, show(f.node), e.what()));
   }
-}
-
-/// A file named in the case: an absolute path, or relative to the case file's directory.
-fs::path resolve(const fs::path& base_dir, const std::string& file) {
-  return fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
 }
 
 #if MPSFSI_DIM == 3
@@ -1415,8 +1512,8 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
 
   std::map<std::string, std::string> body_and_wall_names;
   GeometryFields geometry;
-  read_bodies(top, spec, body_and_wall_names, geometry);
-  read_walls(top, spec, body_and_wall_names, geometry);
+  read_bodies(top, spec, body_and_wall_names, geometry, base_dir);
+  read_walls(top, spec, body_and_wall_names, geometry, base_dir);
   // The fluid needs a time step rule; a solid-only case may use the solid's own (solid.dt or stable dt).
   const bool has_fluid = std::any_of(spec.bodies.begin(), spec.bodies.end(),
                                      [](const BodySpec& b) { return b.kind == BodyKind::fluid; });

@@ -6,6 +6,7 @@
 #include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 #include "core/text.hpp"
+#include "io/surface.hpp"
 
 #include <fmt/format.h>
 
@@ -34,6 +35,61 @@ RoundCount count_round(const RoundShape& s, const Real dp) {
                                             : count_cylinder(s.centre, s.axis, s.radius, dp);
 }
 
+/// The signed distance of an obstacle wall's shape (block, sphere, cylinder, surface), for the bodies it is cut out of.
+SignedDistance wall_distance(const WallSpec& w) {
+  if (w.type == WallType::surface) return ClosedSurface::distance_function(w.surface);
+  if (w.type == WallType::sphere) return sphere_distance(w.round->centre, w.round->radius);
+  if (w.type == WallType::cylinder) return cylinder_distance(w.round->centre, w.round->axis, w.round->radius);
+  return box_distance(w.rect.lo, w.rect.hi);
+}
+
+/// The lattice points of a body: its shape filled, less the points inside the walls it names in `subtract` or
+/// closer than dp/2 to their surfaces (so that no body particle comes closer than dp/2 to a wall's).
+std::vector<Vec> body_points(const CaseSpec& spec, const BodySpec& b) {
+  std::vector<Vec> points = b.surface ? fill_region(b.rect.lo, b.rect.hi, spec.dp, ClosedSurface::distance_function(b.surface))
+                            : !b.round ? fill_rectangle(b.rect.lo, b.rect.hi, spec.dp)
+                            : b.round->kind == RoundShape::Kind::sphere
+                                ? fill_sphere(b.round->centre, b.round->radius, spec.dp)
+                                : fill_cylinder(b.round->centre, b.round->axis, b.round->radius, spec.dp);
+  for (const std::string& name : b.subtract) {
+    const auto w = std::find_if(spec.walls.begin(), spec.walls.end(), [&](const WallSpec& x) { return x.name == name; });
+    if (w == spec.walls.end()) throw CaseError(fmt::format("{}: body '{}': no wall '{}' to subtract", spec.file, b.name, name));
+    const SignedDistance distance = wall_distance(*w);
+    const Real clearance = 0.5 * spec.dp * (1 - 1e-10);
+    Vec nearest;
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&](const Vec& x) { return distance(x, nearest) < clearance; }),
+                 points.end());
+  }
+  return points;
+}
+
+/// The wall points of a wall (core/geometry.hpp's builders).
+std::vector<WallPoint> wall_points(const CaseSpec& spec, const WallSpec& w) {
+  switch (w.type) {
+    case WallType::box: return box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top);
+    case WallType::block: return block_walls(w.rect.lo, w.rect.hi, spec.dp);
+    case WallType::sphere: return sphere_walls(w.round->centre, w.round->radius, spec.dp);
+    case WallType::cylinder: return cylinder_walls(w.round->centre, w.round->axis, w.round->radius, spec.dp);
+    case WallType::surface:
+      return region_walls(w.rect.lo, w.rect.hi, spec.dp, ClosedSurface::distance_function(w.surface), w.fluid_inside,
+                          w.open_top);
+  }
+  return {};
+}
+
+/// What a body's or wall's shape is, for `check`: "" for a rectangle.
+std::string shape_name(const std::optional<RoundShape>& round, const std::shared_ptr<const ClosedSurface>& surface) {
+  if (surface) return dim == 2 ? "polygon" : "surface";
+  if (round) return round->kind == RoundShape::Kind::sphere ? (dim == 2 ? "disc" : "sphere") : "cylinder";
+  return "";
+}
+
+/// Where a surface comes from, for `check`: "hull.stl, 1204 triangles", "a polygon of 4 points, 4 edges".
+std::string surface_source(const ClosedSurface& surface) {
+  return fmt::format("{}, {} {}", surface.source(), surface.n_facets(), dim == 2 ? "edges" : "triangles");
+}
+
 void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   auto& p = scene.particles;
   const int body_index = static_cast<int>(p.bodies.size());
@@ -41,10 +97,7 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   const int material = is_solid ? spec.solid_material_index(b.material) : spec.fluid_material_index(b.material);
   if (material < 0) throw CaseError(fmt::format("{}: body '{}': unknown material '{}'", spec.file, b.name, b.material));
   p.bodies.push_back({b.name, is_solid ? ParticleKind::solid : ParticleKind::fluid, material});
-  const auto points = !b.round ? fill_rectangle(b.rect.lo, b.rect.hi, spec.dp)
-                     : b.round->kind == RoundShape::Kind::sphere
-                         ? fill_sphere(b.round->centre, b.round->radius, spec.dp)
-                         : fill_cylinder(b.round->centre, b.round->axis, b.round->radius, spec.dp);
+  const auto points = body_points(spec, b);
   if (points.empty())
     throw CaseError(fmt::format("{}: body '{}' holds no lattice point at dp = {:g} m; expected a larger body or a smaller dp",
                                 spec.file, b.name, spec.dp));
@@ -78,11 +131,17 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   }
   const Vec half = Vec::Constant(0.5 * spec.dp);
   count.extent = {lo - half, hi + half};
-  if (b.round)
+  count.shape = shape_name(b.round, b.surface);
+  if (b.surface) {
+    count.shape_volume = b.surface->volume();
+    count.shape_bounds = b.surface->bounds();
+    count.shape_source = surface_source(*b.surface);
+  } else if (b.round) {
     count.shape_volume = round_volume(*b.round);
-  else
+  } else if (b.subtract.empty()) {
     count.extent_difference = std::max((count.extent.lo - b.rect.lo).cwiseAbs().maxCoeff(),
                                        (count.extent.hi - b.rect.hi).cwiseAbs().maxCoeff());
+  }
   if (is_solid && b.clamp) {
     count.free_axis = free_axis;
     count.free_length = free_hi >= free_lo ? free_hi - free_lo + spec.dp : 0;
@@ -104,10 +163,7 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   auto& p = scene.particles;
   const int body_index = static_cast<int>(p.bodies.size());
   p.bodies.push_back({w.name, ParticleKind::wall, -1});
-  const auto all_points = w.type == WallType::box      ? box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top)
-                          : w.type == WallType::block  ? block_walls(w.rect.lo, w.rect.hi, spec.dp)
-                          : w.type == WallType::sphere ? sphere_walls(w.round->centre, w.round->radius, spec.dp)
-                                                       : cylinder_walls(w.round->centre, w.round->axis, w.round->radius, spec.dp);
+  const auto all_points = wall_points(spec, w);
   std::vector<WallPoint> points;
   for (const auto& pt : all_points)
     if (clamped.empty() || !taken_by_clamp(p, clamped, pt.x, spec.dp)) points.push_back(pt);
@@ -115,6 +171,12 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   count.name = w.name;
   count.kind = "wall";
   count.n_particles = points.size();
+  count.shape = shape_name(w.round, w.surface);
+  if (w.surface) {
+    count.shape_volume = w.surface->volume();
+    count.shape_bounds = w.surface->bounds();
+    count.shape_source = surface_source(*w.surface);
+  }
   const std::size_t first = p.size();
   for (const auto& pt : points) {
     p.add(pt.x, Vec::Zero(), pt.is_wall ? ParticleKind::wall : ParticleKind::dummy, body_index, -1);
@@ -233,9 +295,15 @@ ParticleCounts count_particles(const CaseSpec& spec) {
   ParticleCounts n;
   for (const auto& b : spec.bodies)
     (b.kind == BodyKind::solid ? n.solid : n.fluid) +=
-        b.round ? count_round(*b.round, spec.dp).filled : product(cells(b.rect, spec.dp));
+        b.surface || !b.subtract.empty() ? body_points(spec, b).size()  // counted by building them
+        : b.round                        ? count_round(*b.round, spec.dp).filled
+                                         : product(cells(b.rect, spec.dp));
   constexpr std::size_t n_dummy = 2;  // the default of the wall builders, which build_scene uses
   for (const auto& w : spec.walls) {
+    if (w.surface) {  // counted by building them
+      for (const WallPoint& x : wall_points(spec, w)) (x.is_wall ? n.wall : n.dummy) += 1;
+      continue;
+    }
     if (w.round) {  // the layers inside the surface
       const RoundCount c = count_round(*w.round, spec.dp);
       n.wall += c.wall;

@@ -26,8 +26,14 @@ struct BodyCount {
   /// Bodies: the largest distance between a side of `extent` and the same side of the file's rectangle [m]
   /// (0 for a sphere or cylinder).
   Real extent_difference = 0;
-  /// Spheres and cylinders: the shape's volume (area in 2D), to compare with the particles' n dp^dim.
+  /// Spheres, cylinders and surfaces: the shape's volume (area in 2D), to compare with the particles' n dp^dim
+  /// (bodies; without the parts cut out by `subtract`), and what the shape is ("disc", "sphere", "cylinder",
+  /// "polygon", "surface").
   std::optional<Real> shape_volume;
+  std::string shape;
+  /// Surfaces: the surface's bounding box, and where it comes from ("hull.stl, 1204 triangles").
+  std::optional<Rect> shape_bounds;
+  std::string shape_source;
   /// Clamped solids: the extent of the unclamped particles (+ dp/2 at each end) along the clamp direction
   /// `free_axis` (0: x, 1: y, 2: z) [m], and the same length in the file (free_part of the rectangle).
   std::optional<Real> free_length;
@@ -54,7 +60,7 @@ constexpr double max_scene_particles = 1e9;
 
 
 /// The particles build_scene makes for a case, counted from its rectangles, spheres and cylinders without
-/// building them:
+/// building them (surfaces, and bodies with walls cut out of them, by building their points):
 /// bodies on the dp lattice, walls with their wall and dummy layers. Wall points that give way to
 /// clamped particles embedded in a wall are counted too (so wall and dummy may be a few too many).
 ParticleCounts count_particles(const CaseSpec& spec);

@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """The health of a fluid run, frame by frame (.vtu or .pvtu frames): the largest fluid speed and where it is,
 the 99.9th percentile and the largest fluid pressure, the fluid particles inside a wall (in a `box` wall or
-a `block` of the resolved case, its faces on the lattice, or inside a `sphere` or `cylinder` wall, with a margin
-of 1e-9 m; "-" for a case without walls
+a `block` of the resolved case, its faces on the lattice, or inside a `sphere`, `cylinder`, `polygon` or `surface`
+obstacle, with a margin of 1e-9 m; "-" for a case without walls
 or with tank_motion) and the fluid particle count. With bounds it is a check: it exits 1 naming the first frame and quantity that breaks one.
 
 Usage
@@ -11,7 +11,8 @@ Usage
   scripts/flow_check.py out/db --until 0.15 --max-speed 3.4      # the frames with t <= 0.15 s only
 
 --min-pressure-at X,Y,P: the pressure of the fluid particle nearest (X, Y) is at least P [Pa]. Every frame is
-checked for particles inside a wall unless --allow-outside.
+checked for particles inside a wall unless --allow-outside. A polygon's or surface's file is read relative to
+--case-dir (the folder of the run's case file; default: where the resolved case's name is found under cases/).
 """
 import argparse
 import os
@@ -29,7 +30,68 @@ FLUID = 0  # ParticleKind::fluid in the `kind` field
 WALL_LAYERS = 3  # a wall's layer and its two dummy layers (core/geometry.hpp: box_walls, block_walls)
 
 
-def tank_boxes(case):
+def surface_distance(shape, dim, case_dir):
+    """The signed distance (negative inside) of a case's polygon (2D) or STL / OBJ surface (3D), scaled, rotated and
+    translated as io/surface.hpp does, as a function of an (n, dim) array of points."""
+    import vtk
+    scale = shape.get("scale", 1.0)
+    scale = [float(scale)] * dim if not isinstance(scale, list) else [float(v) for v in scale]
+    translate = [float(v) for v in shape.get("translate", [0.0] * dim)]
+    transform = vtk.vtkTransform()
+    transform.PostMultiply()
+    transform.Scale(*(scale + [1.0] * (3 - dim)))
+    if dim == 2:
+        transform.RotateZ(float(shape.get("rotate", 0.0)))
+    else:
+        rx, ry, rz = (float(v) for v in shape.get("rotate", [0, 0, 0]))
+        transform.RotateX(rx), transform.RotateY(ry), transform.RotateZ(rz)
+    transform.Translate(*(translate + [0.0] * (3 - dim)))
+    if dim == 2:
+        if "points" in shape:
+            pts = np.array(shape["points"], float)
+        else:
+            rows = []
+            with open(os.path.join(case_dir, shape["file"])) as f:
+                for line in f:
+                    line = line.split("#")[0].replace(",", " ").split()
+                    if line:
+                        rows.append([float(line[0]), float(line[1])])
+            pts = np.array(rows)
+        pts = np.array([transform.TransformPoint(x, y, 0.0)[:2] for x, y in pts])
+        from matplotlib.path import Path
+        path = Path(pts)
+
+        def distance(x):
+            d = np.full(len(x), np.inf)
+            for a, b in zip(pts, np.roll(pts, -1, axis=0)):
+                t = np.clip(((x - a) @ (b - a)) / ((b - a) @ (b - a)), 0, 1)
+                d = np.minimum(d, np.linalg.norm(x - (a + np.outer(t, b - a)), axis=1))
+            return np.where(path.contains_points(x), -d, d)
+        return distance
+    path = os.path.join(case_dir, shape["file"])
+    reader = vtk.vtkSTLReader() if path.lower().endswith(".stl") else vtk.vtkOBJReader()
+    reader.SetFileName(path)
+    moved = vtk.vtkTransformPolyDataFilter()
+    moved.SetInputConnection(reader.GetOutputPort())
+    moved.SetTransform(transform)
+    moved.Update()
+    implicit = vtk.vtkImplicitPolyDataDistance()
+    implicit.SetInput(moved.GetOutput())
+    return lambda x: np.array([implicit.EvaluateFunction(*p) for p in x])
+
+
+def find_case_dir(case):
+    """The folder under cases/ that holds a file named like the case (its name without a _3d suffix)."""
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "cases")
+    name = str(case.get("name", ""))
+    for stem in (name, name[:-3] if name.endswith("_3d") else name):
+        for sub in ("", "3d"):
+            if os.path.exists(os.path.join(root, sub, stem + ".yaml")):
+                return os.path.join(root, sub)
+    return "."
+
+
+def tank_boxes(case, case_dir="."):
     """The walls of the case as (lo, hi, kind, open_top): kind "box" with its inner faces, "block" with its outer
     ones; None for a moving tank (its walls are not where the case puts them), whose particles are then not
     checked. The faces are the lattice's, as the program builds them (core/geometry.cpp): hi = lo + n dp with
@@ -38,7 +100,13 @@ def tank_boxes(case):
         return None
     dp = float(case["dp"])
     boxes = []
+    dim = int(case.get("dimension", 2))
     for w in case.get("walls", []) or []:
+        if w.get("type") in ("polygon", "surface") and w.get("fluid", "outside") == "outside":
+            boxes.append((np.zeros(dim), None, "surface", surface_distance(w[w["type"]], dim, case_dir), dp))
+            continue
+        if w.get("type") in ("polygon", "surface"):
+            continue  # a container: not checked
         if w.get("type") == "sphere":
             s = w["sphere"]
             boxes.append((np.array(s["centre"], float), None, "sphere", float(s["radius"]), dp))
@@ -64,6 +132,9 @@ def outside(x, boxes):
     eps = 1e-9
     x = x[:, :len(boxes[0][0])]  # 2D frames have z = 0
     for lo, hi, kind, open_top, dp in boxes:
+        if kind == "surface":  # (-, -, "surface", signed distance, dp)
+            in_wall |= open_top(x) < -eps
+            continue
         if kind == "sphere":  # (centre, -, "sphere", radius, dp)
             in_wall |= np.linalg.norm(x - lo, axis=1) < open_top - eps
             continue
@@ -109,6 +180,7 @@ def main():
     ap.add_argument("--max-p999", type=float, default=None, help="bound on the 99.9th percentile fluid pressure [Pa]")
     ap.add_argument("--min-pressure-at", default=None, help="X,Y,P: the fluid particle nearest (X, Y) has p >= P [Pa]")
     ap.add_argument("--allow-outside", action="store_true", help="do not fail on particles inside a wall")
+    ap.add_argument("--case-dir", default=None, help="the folder of the run's case file (for its surfaces' files)")
     args = ap.parse_args()
 
     files = frame_files(args.run, PROG)
@@ -117,7 +189,7 @@ def main():
     if args.until is not None:
         files = [f for f in files if not times[f] > args.until]
     case = read_case(args.run, PROG)
-    boxes = tank_boxes(case)
+    boxes = tank_boxes(case, args.case_dir or find_case_dir(case))
     probe = None
     if args.min_pressure_at:
         try:

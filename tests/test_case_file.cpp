@@ -1238,7 +1238,7 @@ TEST(CaseFile, RoundBodiesAndWalls) {
 TEST(CaseFileErrors, RoundShapes) {
   const std::string two = replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}",
                                    "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}, sphere: {centre: [0.5, 0.5], radius: 0.1}");
-  EXPECT_THAT(error_of(two), HasSubstr("'rectangle' and 'sphere' given; expected one shape: rectangle, sphere or cylinder"));
+  EXPECT_THAT(error_of(two), HasSubstr("'rectangle' and 'sphere' given; expected one shape: rectangle, sphere, cylinder or polygon"));
   const std::string bad_radius = replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}",
                                           "sphere: {centre: [0.2, 0.2], radius: -0.1}");
   EXPECT_THAT(error_of(bad_radius), HasSubstr("radius = -0.1: expected a positive radius in metres"));

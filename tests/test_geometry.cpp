@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 using namespace mpsfsi;
 
 namespace {
@@ -297,4 +300,106 @@ TEST(Geometry, CylinderWallsFollowTheSurface) {
   EXPECT_GT(n_ring, 0u);
   EXPECT_EQ(n_ring, n_fill);
   EXPECT_THROW(cylinder_walls(base, Vec::Zero(), r, dp), std::invalid_argument);
+}
+
+// The signed distances of the built-in shapes: negative inside, zero on the surface, and the nearest surface point.
+TEST(Geometry, ShapeDistancesAndNearestPoints) {
+  Vec nearest, x = Vec::Zero();
+  const auto ball = sphere_distance(Vec::Zero(), 1.0);
+  x[0] = 2;
+  EXPECT_DOUBLE_EQ(ball(x, nearest), 1.0);
+  EXPECT_DOUBLE_EQ(nearest[0], 1.0);
+  x[0] = 0.25;
+  EXPECT_DOUBLE_EQ(ball(x, nearest), -0.75);
+  EXPECT_DOUBLE_EQ(nearest[0], 1.0);
+  // A cylinder along the last axis from 0 to 2, radius 0.5: the mantle, an end face and an edge nearest.
+  Vec axis = Vec::Zero();
+  axis[dim - 1] = 2;
+  const auto pile = cylinder_distance(Vec::Zero(), axis, 0.5);
+  x = Vec::Zero();
+  x[0] = 0.2, x[dim - 1] = 1.0;
+  EXPECT_DOUBLE_EQ(pile(x, nearest), -0.3);
+  EXPECT_DOUBLE_EQ(nearest[0], 0.5);
+  EXPECT_DOUBLE_EQ(nearest[dim - 1], 1.0);
+  x[0] = 0, x[dim - 1] = 1.9;
+  EXPECT_NEAR(pile(x, nearest), -0.1, 1e-15);
+  EXPECT_DOUBLE_EQ(nearest[dim - 1], 2.0);
+  x[0] = 1.0, x[dim - 1] = 2.5;
+  EXPECT_NEAR(pile(x, nearest), std::sqrt(0.5), 1e-15);
+  EXPECT_DOUBLE_EQ(nearest[0], 0.5);
+  EXPECT_DOUBLE_EQ(nearest[dim - 1], 2.0);
+  // A box: inside, outside, and on a face (zero, which is not inside).
+  const auto box = box_distance(Vec::Zero(), Vec::Ones());
+  x = Vec::Constant(0.5);
+  x[0] = 0.1;
+  EXPECT_DOUBLE_EQ(box(x, nearest), -0.1);
+  EXPECT_DOUBLE_EQ(nearest[0], 0.0);
+  EXPECT_DOUBLE_EQ(nearest[1], 0.5);
+  x[0] = 2;
+  EXPECT_DOUBLE_EQ(box(x, nearest), 1.0);
+  EXPECT_DOUBLE_EQ(nearest[0], 1.0);
+  x[0] = 0;
+  EXPECT_EQ(box(x, nearest), 0.0);
+}
+
+// A box given by its signed distance is filled and walled as the built-in rectangle, box tank and block, point for
+// point and in their order: a region's lattice and layers are those of the boxes.
+TEST(Geometry, RegionOfABoxIsTheRectangleBoxAndBlock) {
+  const Real dp = 0.01;
+  const Vec lo = Vec::Constant(0.1);
+  Vec hi = Vec::Constant(0.16);
+  hi[0] = 0.2;
+  const auto box = box_distance(lo, hi);
+  EXPECT_EQ(fill_region(lo, hi, dp, box), fill_rectangle(lo, hi, dp));
+  for (const bool open_top : {true, false}) {
+    const auto region = region_walls(lo, hi, dp, box, true, open_top);
+    const auto built = box_walls(lo, hi, dp, open_top);
+    ASSERT_EQ(region.size(), built.size()) << "open_top " << open_top;
+    for (std::size_t k = 0; k < built.size(); ++k) {
+      EXPECT_EQ(region[k].x, built[k].x);
+      EXPECT_EQ(region[k].is_wall, built[k].is_wall) << built[k].x.transpose();
+      EXPECT_LT((region[k].to_surface - built[k].to_surface).norm(), 1e-15) << built[k].x.transpose();
+    }
+  }
+  // An obstacle: the block's points and layers; the offset ends on the nearest face.
+  const auto region = region_walls(lo, hi, dp, box, false, false);
+  const auto built = block_walls(lo, hi, dp);
+  ASSERT_EQ(region.size(), built.size());
+  for (std::size_t k = 0; k < built.size(); ++k) {
+    EXPECT_EQ(region[k].x, built[k].x);
+    EXPECT_EQ(region[k].is_wall, built[k].is_wall) << built[k].x.transpose();
+    const Real depth = std::min((built[k].x - lo).minCoeff(), (hi - built[k].x).minCoeff());
+    EXPECT_NEAR(region[k].to_surface.norm(), depth, 1e-15) << built[k].x.transpose();
+  }
+}
+
+// A region that is not a box: a ball as an obstacle. Its points are the ball's lattice points within three layers of
+// the outside (counted in cells, the largest over the axes); every point less than dp deep is a wall point, and a wall
+// point is less than sqrt(dim) dp deep.
+TEST(Geometry, RegionWallsOfABallKeepThreeLayers) {
+  const Real dp = 0.01, r = 0.083;
+  const Vec c = Vec::Constant(0.3);
+  const auto ball = sphere_distance(c, r);
+  const auto walls = region_walls(c - Vec::Constant(r), c + Vec::Constant(r), dp, ball, false, false);
+  ASSERT_FALSE(walls.empty());
+  std::size_t n_wall = 0;
+  for (const auto& p : walls) {
+    const Real depth = r - (p.x - c).norm();
+    EXPECT_GT(depth, 0);
+    EXPECT_LT(depth, 3 * std::sqrt(Real(dim)) * dp);
+    EXPECT_NEAR(p.to_surface.norm(), depth, 1e-15);
+    if (p.is_wall) {
+      ++n_wall;
+      EXPECT_LT(depth, std::sqrt(Real(dim)) * dp) << p.x.transpose();
+    }
+  }
+  std::size_t n_shallow = 0;
+  for (const Vec& x : fill_region(c - Vec::Constant(r), c + Vec::Constant(r), dp, ball)) {
+    if (r - (x - c).norm() >= dp) continue;
+    ++n_shallow;
+    const bool is_wall = std::any_of(walls.begin(), walls.end(), [&](const WallPoint& p) { return p.x == x && p.is_wall; });
+    EXPECT_TRUE(is_wall) << x.transpose();
+  }
+  EXPECT_GT(n_shallow, 0u);
+  EXPECT_GE(n_wall, n_shallow);
 }
