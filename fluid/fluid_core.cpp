@@ -89,7 +89,15 @@ FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distributi
 
   p.add_scalar_field(fluid_fields::pressure, 0.0);
   p.add_scalar_field(fluid_fields::free_surface, 0.0);
-  if (motion.moving() && !p.has_vector_field(wall_reference_field)) {
+  for (const auto& [name, spec] : setup.wall_motions) {
+    const auto it = std::find_if(p.bodies.begin(), p.bodies.end(), [&](const auto& b) { return b.name == name; });
+    if (it == p.bodies.end() || it->kind != ParticleKind::wall)
+      throw std::invalid_argument("wall_motions: no wall body '" + name + "' among the particles");
+    body_motion.resize(p.bodies.size());
+    body_motion[static_cast<std::size_t>(it - p.bodies.begin())] = WallMotion(spec);
+  }
+  body_rotation.assign(p.bodies.size(), Mat::Identity());
+  if (walls_move() && !p.has_vector_field(wall_reference_field)) {
     auto& reference = p.add_vector_field(wall_reference_field);
     for (std::size_t i = 0; i < p.size(); ++i) reference[i] = p.position[i];
   }
@@ -117,19 +125,35 @@ void FluidCore::classify() {
     if (p.kind[i] == ParticleKind::solid) roles[i] = flag[i] != 0 ? Role::boundary : Role::dummy;
 }
 
-/// Walls and their dummy layers follow the tank motion: rotation about the pivot, v = omega x r.
+/// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own.
 void FluidCore::move_walls(const Real t) {
-  if (!motion.moving()) return;
-  const auto [theta, omega] = motion.at(t);
-  wall_omega = omega;
-  wall_theta = theta;
+  if (!walls_move()) return;
   const auto& reference = p.vector_field(wall_reference_field);
+  if (motion.moving()) {
+    const auto [theta, omega] = motion.at(t);
+    wall_omega = omega;
+    wall_theta = theta;
+    const Mat r = motion.matrix(theta);
+    for (auto& m : body_rotation) m = r;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
+      p.position[i] = motion.place(reference[i], theta);
+      p.velocity[i] = motion.velocity_at(p.position[i], omega);
+    }
+    return;
+  }
+  for (std::size_t b = 0; b < body_motion.size(); ++b)
+    if (body_motion[b].moving()) body_rotation[b] = body_motion[b].matrix(t);
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
-    p.position[i] = motion.place(reference[i], theta);
-    p.velocity[i] = motion.velocity_at(p.position[i], omega);
+    const WallMotion& m = body_motion[p.body[i]];
+    if (!m.moving()) continue;
+    p.position[i] = m.place(reference[i], t);
+    p.velocity[i] = m.velocity(reference[i], t);
   }
 }
+
+const Mat& FluidCore::wall_rotation(const std::size_t j) const { return body_rotation[p.body[j]]; }
 
 /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles. With lateral-wall
 /// friction k (fluid.lateral_walls), the velocity relative to the tank then decays exactly over the step:
@@ -299,8 +323,7 @@ std::size_t FluidCore::keep_out_of_walls() {
   if (!p.has_vector_field(wall_surface_field)) return 0;
   constexpr int passes = 3;
   const auto& to_surface = p.vector_field(wall_surface_field);
-  const bool moving = motion.moving();
-  const Mat rotation = moving ? motion.matrix(wall_theta) : Mat::Identity();
+  const bool moving = walls_move();
   const Real half = 0.5 * dp, reach2 = dim * half * half;
   const std::size_t none = p.size();
   const auto deepest_cell = [&](const std::size_t i) {
@@ -310,9 +333,9 @@ std::size_t FluidCore::keep_out_of_walls() {
       if (p.kind[j] != ParticleKind::wall && p.kind[j] != ParticleKind::dummy) continue;
       const Vec d = p.position[i] - p.position[j];
       if (d.squaredNorm() >= reach2) continue;
-      if ((moving ? Vec(rotation.transpose() * d) : d).cwiseAbs().maxCoeff() >= half) continue;
+      if ((moving ? Vec(wall_rotation(j).transpose() * d) : d).cwiseAbs().maxCoeff() >= half) continue;
       assert(!to_surface[j].isZero() && "every wall and dummy particle has its offset to the surface");
-      const Vec s = moving ? Vec(rotation * to_surface[j]) : to_surface[j];
+      const Vec s = moving ? Vec(wall_rotation(j) * to_surface[j]) : to_surface[j];
       const Vec n = s.normalized();
       const Real depth = (s - d).dot(n);
       if (depth <= 0) continue;

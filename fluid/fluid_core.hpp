@@ -10,6 +10,7 @@
 #include "core/neighbours.hpp"
 #include "core/particles.hpp"
 #include "core/tank_motion.hpp"
+#include "core/wall_motion.hpp"
 #include "core/time_spec.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "fluid/pressure_solver.hpp"
@@ -41,14 +42,20 @@ struct FluidCore {
   /// std::invalid_argument when the particles hold more than one fluid material or none.
   FluidCore(const FluidSetup& setup, ParticleSet& particles, Distribution& distribution, const FluidOptions& options);
 
-  /// The particle field that holds each wall particle's position in the tank's rest frame (moving tanks).
+  /// The particle field that holds each wall particle's position in the tank's rest frame (moving tanks), or at
+  /// rest (walls that move on their own).
   static constexpr const char* wall_reference_field = "wall_reference";
 
   Role role(ParticleKind k) const;
   /// roles of every particle (owned and ghosts) for this step.
   void classify();
-  /// Walls and their dummy layers follow the tank motion: rotation about the pivot, v = omega x r.
+  /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own
+  /// (core/wall_motion.hpp), to their place and velocity at t.
   void move_walls(Real t);
+  /// Whether any wall moves (with the tank or on its own).
+  bool walls_move() const { return motion.moving() || !body_motion.empty(); }
+  /// The rotation of wall particle j's body at the last move_walls (the identity for walls at rest).
+  const Mat& wall_rotation(std::size_t j) const;
   /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles (fluid/fluid_core.cpp).
   void predict(Real dt);
   /// Pairs within `radius` at the predicted positions, rows of the first n particles (a filtered copy of nl).
@@ -79,6 +86,10 @@ struct FluidCore {
   Distribution& dist;
   FluidOptions opt;
   TankMotion motion;
+  /// The walls' own motions by ParticleSet body index (a motion that does not move for the other bodies); empty
+  /// when no wall moves on its own.
+  std::vector<WallMotion> body_motion;
+  std::vector<Mat> body_rotation;  ///< R of each body at the last move_walls
   int rank = 0;
   Real dp = 0, re_g = 0, re_l = 0, r_max = 0;
   LatticeConstants lat_g, lat_l;

@@ -8,6 +8,7 @@
 #include "core/kernel.hpp"
 #include "core/tank_motion.hpp"
 #include "core/time_spec.hpp"
+#include "core/wall_motion.hpp"
 #include "core/types.hpp"
 
 #include <string>
@@ -153,6 +154,8 @@ struct FluidSetup {
   std::vector<FluidMaterial> materials; ///< indexed by ParticleSet::material of the fluid particles
   FluidParameters parameters;
   TankMotionSpec tank_motion;           ///< moves the wall particles
+  /// Walls that move on their own, by their body's name (ParticleSet::bodies): their particles follow the motion.
+  std::vector<std::pair<std::string, WallMotionSpec>> wall_motions;
 };
 
 }  // namespace mpsfsi

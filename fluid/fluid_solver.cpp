@@ -75,7 +75,7 @@ Real FluidSolver::stable_dt(std::string* limit) const {
   if (m.time.dt) return fluid_stable_dt(m.time, m.dp, m.nu, 0, 0, m.opt.viscous_number, limit);
   Real v2_max = 0;
   for (std::size_t i = 0; i < m.p.n_owned(); ++i)
-    if (m.p.kind[i] == ParticleKind::fluid || (m.motion.moving() && m.p.kind[i] == ParticleKind::wall))
+    if (m.p.kind[i] == ParticleKind::fluid || (m.walls_move() && m.p.kind[i] == ParticleKind::wall))
       v2_max = std::max(v2_max, m.p.velocity[i].squaredNorm());
   MPI_Allreduce(MPI_IN_PLACE, &v2_max, 1, MPI_DOUBLE, MPI_MAX, m.comm);
   return fluid_stable_dt(m.time, m.dp, m.nu, m.gravity.norm(), std::sqrt(v2_max), m.opt.viscous_number, limit);

@@ -8,6 +8,7 @@
 #include "core/geometry.hpp"
 #include "core/tank_motion.hpp"
 #include "core/time_spec.hpp"
+#include "core/wall_motion.hpp"
 #include "core/types.hpp"
 #include "core/distribution.hpp"
 #include "coupling/coupling_parameters.hpp"
@@ -79,6 +80,7 @@ struct WallSpec {
   std::optional<RoundShape> round;  ///< sphere, cylinder: the shape
   std::shared_ptr<const ClosedSurface> surface;  ///< surface: the shape
   bool fluid_inside = false;  ///< surface: a container (the layers outside the surface) instead of an obstacle
+  WallMotionSpec motion;      ///< a motion of its own (`motion`: a gate, a wave maker), relative to the domain
   /// A tank: the fluid is inside it (a box, or a surface with the fluid inside).
   bool is_container() const { return type == WallType::box || (type == WallType::surface && fluid_inside); }
 };

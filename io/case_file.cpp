@@ -851,6 +851,59 @@ struct GeometryFields {
   std::vector<Field> body_rect, body_material, body_clamp, body_subtract, wall_rect;
 };
 
+const std::string wall_motion_form =
+    "a motion {translation: {type: velocity, velocity: " + components() + "} or {type: sine, amplitude: " + components() +
+    ", period}, rotation: {type: sine, pivot: " + components() + (dim == 3 ? ", axis: [x, y, z]" : "") +
+    ", amplitude_deg, period}, start, ramp, stop} (times in s)";
+
+/// A wall's own motion (core/wall_motion.hpp): a translation, a rotation or both, from `start`, ramped up over
+/// `ramp`, frozen at `stop`.
+WallMotionSpec read_wall_motion(MapReader r) {
+  const Source& src = r.source();
+  WallMotionSpec m;
+  MapReader t = r.optional_map("translation", "a translation {type: velocity, velocity} or {type: sine, amplitude, period}");
+  if (!t.empty()) {
+    const std::string type = t.choice("type", {"velocity", "sine"});
+    if (type == "velocity") {
+      m.translation = WallMotionSpec::Translation::velocity;
+      m.velocity = t.vec("velocity", "the velocity " + components("v") + " in m/s after the ramp");
+      if (!(m.velocity.norm() <= max_speed))
+        src.expected(t.at("velocity"), fmt::format("a velocity {} in m/s of magnitude at most {:g} m/s", components("v"), max_speed));
+    } else {
+      m.translation = WallMotionSpec::Translation::sine;
+      m.amplitude = t.vec("amplitude", "the displacement's amplitude " + components() + " in metres");
+      m.period = t.number("period", positive, "a positive period [s]");
+      if (m.period < min_period) src.expected(t.at("period"), fmt::format("a period of at least {:g} s", min_period));
+    }
+    t.finish();
+  }
+  MapReader q = r.optional_map("rotation", "a rotation {type: sine, pivot, amplitude_deg, period}");
+  if (!q.empty()) {
+    q.choice("type", {"sine"});
+    m.rotation = WallMotionSpec::Rotation::sine;
+    m.pivot = q.vec("pivot", point_form + " (the centre of the rotation at rest)");
+#if MPSFSI_DIM == 3
+    const std::string axis_form = "a non-zero rotation axis [x, y, z] through the pivot (default [0, 0, 1]; normalised)";
+    m.axis = q.vec("axis", Vec::UnitZ(), axis_form);
+    if (!(m.axis.norm() > 0)) src.expected(q.at("axis"), axis_form);
+    m.axis.normalize();
+#endif
+    m.angle_amplitude = q.number("amplitude_deg", in_open(-90, 90), "a number of degrees in (-90, 90) (the amplitude)") * pi / 180;
+    m.angle_period = q.number("period", positive, "a positive period [s]");
+    if (m.angle_period < min_period) src.expected(q.at("period"), fmt::format("a period of at least {:g} s", min_period));
+    q.finish();
+  }
+  m.start = r.number("start", 0, non_negative, "a time >= 0 [s] (the motion starts)");
+  m.ramp = r.number("ramp", 0, non_negative, "a time >= 0 [s] (the velocity or amplitude rises smoothly over it)");
+  if (const auto f = r.optional("stop")) {
+    m.stop = to_real(src, *f, positive, "a time > start [s] (the motion stops, the wall stays)");
+    if (!(m.stop > m.start)) src.expected(*f, "a time > start [s] (the motion stops, the wall stays)");
+  }
+  r.finish();
+  if (!m.moving()) src.fail(r.field(), fmt::format("{}: no translation and no rotation; expected {}", r.field().path, wall_motion_form));
+  return m;
+}
+
 const std::string body_shapes = "rectangle | sphere | cylinder | " + surface_key;
 
 void read_bodies(MapReader& top, CaseSpec& spec, std::map<std::string, std::string>& names, GeometryFields& g,
@@ -917,7 +970,7 @@ void read_walls(MapReader& top, CaseSpec& spec, std::map<std::string, std::strin
   const std::string types = "box | block | sphere | cylinder | " + surface_key;
   for (const Field& item : top.list("walls", "a list of walls, each {name, type: " + types + ", ...}", false)) {
     MapReader r(src, item, "a wall {name, type: " + types + ", rectangle | sphere | cylinder | " + surface_key +
-                               ", fluid, open_top}");
+                               ", fluid, open_top, motion}");
     WallSpec w;
     w.name = unique_name(r, names, "bodies and walls");
     const std::string type = r.choice("type", {"box", "block", "sphere", "cylinder", surface_key});
@@ -934,6 +987,7 @@ void read_walls(MapReader& top, CaseSpec& spec, std::map<std::string, std::strin
     } else {
       w.rect = r.rect("rectangle", rect_form + (w.type == WallType::box ? " (inner, wetted side of the box)" : " (the block)"));
     }
+    if (r.has("motion")) w.motion = read_wall_motion(MapReader(src, r.at("motion"), wall_motion_form));
     if (w.type == WallType::box) w.open_top = r.boolean("open_top", true, "true or false (box without a lid)");
     if (w.type == WallType::surface && w.fluid_inside)
       w.open_top = r.boolean("open_top", false, "true or false (no wall layers above the surface's top: a tank without a lid)");
@@ -1108,6 +1162,11 @@ void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
   r.finish();
   if (m.type != TankMotionType::none && spec.walls.empty())
     src.fail(r.at("type"), fmt::format("tank_motion.type = {}: expected walls (a tank) to move", type));
+  for (const auto& w : spec.walls)
+    if (m.type != TankMotionType::none && w.motion.moving())
+      src.fail(r.at("type"), fmt::format("tank_motion.type = {} and wall '{}' has a motion of its own: expected the tank "
+                                         "to move or its walls on their own, not both",
+                                         type, w.name));
 }
 
 void read_coupling(MapReader r, CouplingParameters& c) {

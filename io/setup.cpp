@@ -14,6 +14,8 @@ FluidSetup fluid_setup(const CaseSpec& spec) {
   s.materials = spec.fluid_materials;
   s.parameters = spec.fluid;
   s.tank_motion = spec.tank_motion;
+  for (const auto& w : spec.walls)
+    if (w.motion.moving()) s.wall_motions.emplace_back(w.name, w.motion);
   return s;
 }
 

@@ -1259,3 +1259,48 @@ TEST(CaseFileErrors, RoundShapes) {
       "walls:\n  - {name: ball, type: sphere, sphere: {centre: [0.35, 0.2], radius: 0.1}}\n";
   EXPECT_THAT(error_of(overlap), HasSubstr("bodies must not overlap walls"));
 }
+
+// A wall's own motion: a translation and a rotation with start, ramp and stop, read into WallMotionSpec and passed
+// to the fluid by the wall's name.
+TEST(CaseFile, WallMotion) {
+  const std::string text = std::string(minimal_case) +
+                           "walls:\n  - name: piston\n    type: block\n    rectangle: {min: [0.5, 0], max: [0.52, 0.2]}\n"
+                           "    motion: {translation: {type: sine, amplitude: [0.05, 0], period: 1.2}, rotation: {type: "
+                           "sine, pivot: [0.5, 0], amplitude_deg: 10, period: 2}, start: 0.1, ramp: 0.5, stop: 4}\n";
+  const CaseSpec spec = parse_case(text, file_name);
+  const WallMotionSpec& m = spec.walls[0].motion;
+  EXPECT_EQ(m.translation, WallMotionSpec::Translation::sine);
+  EXPECT_DOUBLE_EQ(m.amplitude[0], 0.05);
+  EXPECT_DOUBLE_EQ(m.period, 1.2);
+  EXPECT_EQ(m.rotation, WallMotionSpec::Rotation::sine);
+  EXPECT_DOUBLE_EQ(m.angle_amplitude, 10 * deg);
+  EXPECT_DOUBLE_EQ(m.angle_period, 2);
+  EXPECT_DOUBLE_EQ(m.start, 0.1);
+  EXPECT_DOUBLE_EQ(m.ramp, 0.5);
+  EXPECT_DOUBLE_EQ(m.stop, 4);
+  const FluidSetup setup = fluid_setup(spec);
+  ASSERT_EQ(setup.wall_motions.size(), 1u);
+  EXPECT_EQ(setup.wall_motions[0].first, "piston");
+  EXPECT_EQ(parse_case(replaced(text, ", start: 0.1, ramp: 0.5, stop: 4", ""), file_name).walls[0].motion.stop,
+            std::numeric_limits<Real>::infinity());
+}
+
+TEST(CaseFileErrors, WallMotion) {
+  const std::string wall = std::string(minimal_case) +
+                           "walls:\n  - {name: gate, type: block, rectangle: {min: [0.5, 0], max: [0.52, 0.2]}, motion: MOTION}\n";
+  const auto with = [&](const std::string& motion) { return replaced(wall, "MOTION", motion); };
+  EXPECT_THAT(error_of(with("{start: 1}")), HasSubstr("walls[0].motion: no translation and no rotation; expected a motion"));
+  EXPECT_THAT(error_of(with("{translation: {type: velocity, velocity: [0, 1]}, start: 1, stop: 0.5}")),
+              HasSubstr("stop = 0.5: expected a time > start [s]"));
+  EXPECT_THAT(error_of(with("{translation: {type: spin}}")), HasSubstr("type = spin"));
+  EXPECT_THAT(error_of(with("{translation: {type: sine, amplitude: [0.1, 0], period: 0}}")),
+              HasSubstr("period = 0: expected a positive period [s]"));
+  EXPECT_THAT(error_of(with("{rotation: {type: sine, pivot: [0, 0], amplitude_deg: 95, period: 1}}")),
+              HasSubstr("amplitude_deg = 95: expected a number of degrees in (-90, 90)"));
+  EXPECT_THAT(error_of(with("{translation: {type: velocity, velocity: [0, 1]}, ramp: -1}")), HasSubstr("ramp = -1"));
+  EXPECT_THAT(error_of(with("{translation: {type: velocity, velocity: [0, 1]}, speed: 2}")), HasSubstr("unknown key 'speed'"));
+  // The tank moves or its walls on their own, not both.
+  const std::string both = with("{translation: {type: velocity, velocity: [0, 1]}}") +
+                           "tank_motion: {type: sine_roll, pivot: [0.5, 0], amplitude_deg: 4, period: 1.2}\n";
+  EXPECT_THAT(error_of(both), HasSubstr("tank_motion.type = sine_roll and wall 'gate' has a motion of its own"));
+}

@@ -1,0 +1,66 @@
+// Prescribed rigid motion of one wall body on its own (a gate that is lifted, a piston or flap wave maker, a
+// paddle): a translation d(t) and a rotation theta(t) about a pivot carried by the translation,
+//   x(t) = pivot + d(t) + R(theta(t)) (x0 - pivot),      v(t) = d'(t) + theta'(t) e x (x(t) - pivot - d(t)),
+// e = e_z in 2D, the rotation axis in 3D. Each part is a formula of tau = min(t, stop) - start (nothing before
+// `start`, frozen after `stop`):
+//   translation `velocity`: d' = V r(tau), r the smooth ramp of core/ramp.hpp over `ramp` (a constant velocity
+//                           after it), d its exact integral;
+//   translation `sine`:     d = A r(tau) sin(2 pi tau / T);
+//   rotation `sine`:        theta = a r(tau) sin(2 pi tau / T_r).
+// The fluid moves each wall body's particles with its motion (fluid/fluid_core.cpp); knows nothing of case files
+// (io/case_file.cpp fills WallMotionSpec).
+#pragma once
+
+#include "core/types.hpp"
+
+#include <limits>
+
+namespace mpsfsi {
+
+struct WallMotionSpec {
+  enum class Translation { none, velocity, sine };
+  enum class Rotation { none, sine };
+  Translation translation = Translation::none;
+  Vec velocity = Vec::Zero();   ///< velocity: the velocity after the ramp [m/s]
+  Vec amplitude = Vec::Zero();  ///< sine: the displacement's amplitude [m]
+  Real period = 1;              ///< sine: the translation's period [s]
+  Rotation rotation = Rotation::none;
+  Vec pivot = Vec::Zero();      ///< the rotation's centre at rest [m]
+#if MPSFSI_DIM == 3
+  Vec axis = Vec::UnitZ();      ///< 3D: the rotation axis through the pivot, normalised
+#endif
+  Real angle_amplitude = 0;     ///< rotation sine: amplitude [rad]
+  Real angle_period = 1;        ///< rotation sine: period [s]
+  Real start = 0;               ///< the motion starts [s]
+  Real ramp = 0;                ///< the velocity (velocity) or the amplitudes (sine) rise over this time [s]
+  Real stop = std::numeric_limits<Real>::infinity();  ///< the motion stops, the wall stays where it is [s]
+  bool moving() const { return translation != Translation::none || rotation != Rotation::none; }
+};
+
+class WallMotion {
+ public:
+  WallMotion() = default;
+  explicit WallMotion(const WallMotionSpec& spec) : s_(spec) {}
+  bool moving() const { return s_.moving(); }
+  const WallMotionSpec& spec() const { return s_; }
+
+  /// d(t) and d'(t).
+  Vec displacement(Real t) const;
+  Vec translation_velocity(Real t) const;
+  /// theta(t) [rad] and theta'(t) [rad/s].
+  Real angle(Real t) const;
+  Real angular_velocity(Real t) const;
+  /// R(theta(t)).
+  Mat matrix(Real t) const;
+  /// Where the wall point x0 (at rest) is at t, and its velocity there.
+  Vec place(const Vec& x0, Real t) const;
+  Vec velocity(const Vec& x0, Real t) const;
+
+ private:
+  /// tau = min(t, stop) - start, and whether the motion is under way (start < t < stop).
+  Real tau(Real t) const;
+  bool running(Real t) const { return t > s_.start && t < s_.stop; }
+  WallMotionSpec s_;
+};
+
+}  // namespace mpsfsi
