@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace mpsfsi {
 
@@ -37,24 +38,23 @@ std::pair<T, T> ramped_sine(const T& amplitude, const Real period, const Real ta
 
 Real WallMotion::tau(const Real t) const { return std::max(Real(0), std::min(t, s_.stop) - s_.start); }
 
-Vec WallMotion::displacement(const Real t) const {
+std::pair<Vec, Vec> WallMotion::translation(const Real t) const {
+  const Vec zero = Vec::Zero();
   switch (s_.translation) {
-    case WallMotionSpec::Translation::none: return Vec::Zero();
-    case WallMotionSpec::Translation::velocity: return s_.velocity * ramp_integral(tau(t), s_.ramp);
-    case WallMotionSpec::Translation::sine: return ramped_sine(s_.amplitude, s_.period, tau(t), s_.ramp).first;
+    case WallMotionSpec::Translation::none: return {zero, zero};
+    case WallMotionSpec::Translation::velocity:
+      return {s_.velocity * ramp_integral(tau(t), s_.ramp), running(t) ? Vec(s_.velocity * ramp_factor(tau(t), s_.ramp)) : zero};
+    case WallMotionSpec::Translation::sine: {
+      const auto [d, v] = ramped_sine(s_.amplitude, s_.period, tau(t), s_.ramp);
+      return {d, running(t) ? v : zero};
+    }
   }
-  return Vec::Zero();
+  return {zero, zero};
 }
 
-Vec WallMotion::translation_velocity(const Real t) const {
-  if (!running(t)) return Vec::Zero();
-  switch (s_.translation) {
-    case WallMotionSpec::Translation::none: return Vec::Zero();
-    case WallMotionSpec::Translation::velocity: return s_.velocity * ramp_factor(tau(t), s_.ramp);
-    case WallMotionSpec::Translation::sine: return ramped_sine(s_.amplitude, s_.period, tau(t), s_.ramp).second;
-  }
-  return Vec::Zero();
-}
+Vec WallMotion::displacement(const Real t) const { return translation(t).first; }
+
+Vec WallMotion::translation_velocity(const Real t) const { return translation(t).second; }
 
 Real WallMotion::angle(const Real t) const {
   if (s_.rotation == WallMotionSpec::Rotation::none) return 0;
@@ -75,20 +75,18 @@ Mat WallMotion::matrix(const Real t) const {
 #endif
 }
 
-Vec WallMotion::place(const Vec& x0, const Real t) const {
-  return s_.pivot + displacement(t) + matrix(t) * (x0 - s_.pivot);
-}
-
-Vec WallMotion::velocity(const Vec& x0, const Real t) const {
-  Vec v = translation_velocity(t);
-  if (s_.rotation == WallMotionSpec::Rotation::none) return v;
-  const Vec r = matrix(t) * (x0 - s_.pivot);
+WallMotionState WallMotion::at(const Real t) const {
+  WallMotionState m;
+  m.pivot = s_.pivot;
+  std::tie(m.displacement, m.velocity) = translation(t);
+  if (s_.rotation == WallMotionSpec::Rotation::none) return m;
+  m.rotation = matrix(t);
 #if MPSFSI_DIM == 2
-  const Angular spin = angular_velocity(t);
+  m.spin = angular_velocity(t);
 #else
-  const Angular spin = angular_velocity(t) * s_.axis;
+  m.spin = angular_velocity(t) * s_.axis;
 #endif
-  return v + cross(spin, r);
+  return m;
 }
 
 }  // namespace mpsfsi

@@ -14,6 +14,7 @@
 #include "core/types.hpp"
 
 #include <limits>
+#include <utility>
 
 namespace mpsfsi {
 
@@ -37,6 +38,18 @@ struct WallMotionSpec {
   bool moving() const { return translation != Translation::none || rotation != Rotation::none; }
 };
 
+/// A wall's motion at one time: what places its points and gives their velocities, computed once for all of them.
+struct WallMotionState {
+  Vec pivot = Vec::Zero();         ///< the pivot at rest
+  Vec displacement = Vec::Zero();  ///< d(t)
+  Vec velocity = Vec::Zero();      ///< d'(t)
+  Mat rotation = Mat::Identity();  ///< R(theta(t))
+  Angular spin = angular_zero();   ///< theta'(t) e
+  /// Where the wall point x0 (at rest) is, and its velocity there.
+  Vec place(const Vec& x0) const { return pivot + displacement + rotation * (x0 - pivot); }
+  Vec velocity_of(const Vec& x0) const { return velocity + cross(spin, Vec(rotation * (x0 - pivot))); }
+};
+
 class WallMotion {
  public:
   WallMotion() = default;
@@ -52,11 +65,15 @@ class WallMotion {
   Real angular_velocity(Real t) const;
   /// R(theta(t)).
   Mat matrix(Real t) const;
-  /// Where the wall point x0 (at rest) is at t, and its velocity there.
-  Vec place(const Vec& x0, Real t) const;
-  Vec velocity(const Vec& x0, Real t) const;
+  /// The motion at t.
+  WallMotionState at(Real t) const;
+  /// Where the wall point x0 (at rest) is at t, and its velocity there (at(t) for one point).
+  Vec place(const Vec& x0, const Real t) const { return at(t).place(x0); }
+  Vec velocity(const Vec& x0, const Real t) const { return at(t).velocity_of(x0); }
 
  private:
+  /// d(t) and d'(t) together.
+  std::pair<Vec, Vec> translation(Real t) const;
   /// tau = min(t, stop) - start, and whether the motion is under way (start < t < stop).
   Real tau(Real t) const;
   bool running(Real t) const { return t > s_.start && t < s_.stop; }

@@ -96,7 +96,7 @@ FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distributi
     body_motion.resize(p.bodies.size());
     body_motion[static_cast<std::size_t>(it - p.bodies.begin())] = WallMotion(spec);
   }
-  body_rotation.assign(p.bodies.size(), Mat::Identity());
+  body_state.assign(p.bodies.size(), WallMotionState{});
   if (walls_move() && !p.has_vector_field(wall_reference_field)) {
     auto& reference = p.add_vector_field(wall_reference_field);
     for (std::size_t i = 0; i < p.size(); ++i) reference[i] = p.position[i];
@@ -134,7 +134,7 @@ void FluidCore::move_walls(const Real t) {
     wall_omega = omega;
     wall_theta = theta;
     const Mat r = motion.matrix(theta);
-    for (auto& m : body_rotation) m = r;
+    for (auto& m : body_state) m.rotation = r;
     for (std::size_t i = 0; i < p.size(); ++i) {
       if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
       p.position[i] = motion.place(reference[i], theta);
@@ -142,18 +142,19 @@ void FluidCore::move_walls(const Real t) {
     }
     return;
   }
+  // Each body's motion once per step, then its points.
   for (std::size_t b = 0; b < body_motion.size(); ++b)
-    if (body_motion[b].moving()) body_rotation[b] = body_motion[b].matrix(t);
+    if (body_motion[b].moving()) body_state[b] = body_motion[b].at(t);
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) continue;
-    const WallMotion& m = body_motion[p.body[i]];
-    if (!m.moving()) continue;
-    p.position[i] = m.place(reference[i], t);
-    p.velocity[i] = m.velocity(reference[i], t);
+    if (!body_motion[p.body[i]].moving()) continue;
+    const WallMotionState& m = body_state[p.body[i]];
+    p.position[i] = m.place(reference[i]);
+    p.velocity[i] = m.velocity_of(reference[i]);
   }
 }
 
-const Mat& FluidCore::wall_rotation(const std::size_t j) const { return body_rotation[p.body[j]]; }
+const Mat& FluidCore::wall_rotation(const std::size_t j) const { return body_state[p.body[j]].rotation; }
 
 /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles. With lateral-wall
 /// friction k (fluid.lateral_walls), the velocity relative to the tank then decays exactly over the step:

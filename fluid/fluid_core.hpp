@@ -89,7 +89,7 @@ struct FluidCore {
   /// The walls' own motions by ParticleSet body index (a motion that does not move for the other bodies); empty
   /// when no wall moves on its own.
   std::vector<WallMotion> body_motion;
-  std::vector<Mat> body_rotation;  ///< R of each body at the last move_walls
+  std::vector<WallMotionState> body_state;  ///< each body's motion at the last move_walls (at rest: the identity)
   int rank = 0;
   Real dp = 0, re_g = 0, re_l = 0, r_max = 0;
   LatticeConstants lat_g, lat_l;

@@ -13,21 +13,18 @@ import argparse
 import math
 import os
 import shutil
-import subprocess
 import sys
 
 import numpy as np
 import yaml
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
+sys.path.insert(0, os.path.join(HERE, "..", "support"))
+from run_checks import fail, run  # noqa: E402
 from run_output import frame_files, frame_times, read_frame  # noqa: E402
 
 FLUID, WALL, DUMMY = 0, 1, 2  # ParticleKind (core/particles.hpp)
-
-
-def fail(msg):
-    print("FAIL: " + msg)
-    sys.exit(1)
 
 
 def displacement(t, motion):
@@ -49,11 +46,7 @@ def main():
     ap.add_argument("extra", nargs="*")
     args = ap.parse_args()
     shutil.rmtree(args.work, ignore_errors=True)
-    cmd = [args.mpsfsi, "run", args.case, "--quiet", "--output", args.work, "--end-time", str(args.end), *args.extra]
-    print("$ " + " ".join(cmd), flush=True)
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if r.returncode != 0:
-        fail(f"exit code {r.returncode}:\n{r.stdout}")
+    run([args.mpsfsi, "run", args.case, "--quiet", "--output", args.work, "--end-time", str(args.end), *args.extra])
     with open(os.path.join(args.work, "case.resolved.yaml")) as f:
         case = yaml.safe_load(f)
     dp = float(case["dp"])

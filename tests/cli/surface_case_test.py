@@ -9,7 +9,6 @@ Usage: surface_case_test.py --mpsfsi BIN --case CASE --work DIR --steps N [-- ru
 import argparse
 import os
 import shutil
-import subprocess
 import sys
 
 import numpy as np
@@ -21,17 +20,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 EXTRUDE = os.path.join(HERE, "..", "..", "scripts", "extrude_polygon_stl.py")
 
 
-def fail(msg):
-    print("FAIL: " + msg)
-    sys.exit(1)
-
-
-def run(cmd):
-    print("$ " + " ".join(cmd), flush=True)
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if r.returncode != 0:
-        fail(f"exit code {r.returncode}; output:\n{r.stdout}")
-    return r.stdout
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from run_checks import fail, run  # noqa: E402
 
 
 def corners(rect):

@@ -12,7 +12,6 @@ import glob
 import os
 import shlex
 import shutil
-import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
@@ -21,17 +20,8 @@ import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
 
-def fail(msg):
-    print("FAIL: " + msg)
-    sys.exit(1)
-
-
-def run(cmd):
-    print("$ " + " ".join(cmd), flush=True)
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if r.returncode != 0:
-        fail(f"exit code {r.returncode}; output:\n{r.stdout}")
-    return r.stdout
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from run_checks import fail, run  # noqa: E402
 
 
 def last_frame(folder):
