@@ -85,7 +85,7 @@ struct WallSpec {
   bool is_container() const { return type == WallType::box || (type == WallType::surface && fluid_inside); }
 };
 
-enum class ProbeType { pressure, surge_front, column_height, displacement };
+enum class ProbeType { pressure, surge_front, column_height, wave_gauge, displacement };
 
 /// Frame of a displacement probe: global, or the tank's rotating frame (R(-theta)(x - pivot) - (x0 - pivot)).
 enum class ProbeFrame { global, tank };

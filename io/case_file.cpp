@@ -854,13 +854,62 @@ struct GeometryFields {
 const std::string wall_motion_form =
     "a motion {translation: {type: velocity, velocity: " + components() + "} or {type: sine, amplitude: " + components() +
     ", period}, rotation: {type: sine, pivot: " + components() + (dim == 3 ? ", axis: [x, y, z]" : "") +
-    ", amplitude_deg, period}, start, ramp, stop} (times in s)";
+    ", amplitude_deg, period}, start, ramp, stop} or {wave_maker: {type: piston | flap, stroke, period, direction, "
+    "hinge, water_level}, start, ramp, stop} (times in s)";
+
+const std::string wave_maker_form = "a wave maker {type: piston | flap, stroke, period, direction, hinge, water_level}";
+
+/// A wave maker's paddle motion by its stroke S (peak to peak; a flap's at the still water level) and period T,
+/// the waves running along the horizontal `direction`: a piston translates by (S/2) sin(2 pi tau / T) along it; a
+/// flap turns about its hinge line (through `hinge`, horizontal and across the direction) by theta = atan(S / (2 d))
+/// sin(2 pi tau / T), d the still water level above the hinge, its top moving along the direction first.
+void read_wave_maker(MapReader w, WallMotionSpec& m) {
+  const Source& src = w.source();
+  const bool piston = w.choice("type", {"piston", "flap"}) == "piston";
+  const Real stroke = w.number("stroke", positive, "the paddle's stroke S > 0 [m] (peak to peak; a flap's at the still water level)");
+  const Real period = w.number("period", positive, "a positive period [s]");
+  if (period < min_period) src.expected(w.at("period"), fmt::format("a period of at least {:g} s", min_period));
+  const std::string direction_form = "a horizontal direction " + components() + " (the last component 0; default [1, 0" +
+                                     (dim == 3 ? ", 0" : "") + "]; normalised): the waves run along it";
+  Vec direction = w.vec("direction", Vec::UnitX(), direction_form);
+  if (!(direction.norm() > 0 && std::isfinite(direction.norm()) && direction[dim - 1] == 0))
+    src.expected(w.at("direction"), direction_form);
+  direction.normalize();
+  if (piston) {
+    m.translation = WallMotionSpec::Translation::sine;
+    m.amplitude = 0.5 * stroke * direction;
+    m.period = period;
+  } else {
+    m.rotation = WallMotionSpec::Rotation::sine;
+    m.pivot = w.vec("hinge", point_form + " (a point on the flap's hinge line)");
+    const Real level = w.number("water_level", any_number, "the still water level [m] (the height at which the stroke is measured)");
+    const Real depth = level - m.pivot[dim - 1];
+    if (!(depth > 0))
+      src.expected(w.at("water_level"), fmt::format("a still water level above the hinge (height {:g} m)", m.pivot[dim - 1]));
+    const Real amplitude = std::atan(0.5 * stroke / depth);
+#if MPSFSI_DIM == 3
+    m.axis = Vec(-direction[1], direction[0], 0);  // e_z x direction: a positive angle moves the top along the direction
+    m.angle_amplitude = amplitude;
+#else
+    m.angle_amplitude = -direction[0] * amplitude;  // about e_z: clockwise moves the top along +x
+#endif
+    m.angle_period = period;
+  }
+  w.finish();
+}
 
 /// A wall's own motion (core/wall_motion.hpp): a translation, a rotation or both, from `start`, ramped up over
 /// `ramp`, frozen at `stop`.
 WallMotionSpec read_wall_motion(MapReader r) {
   const Source& src = r.source();
   WallMotionSpec m;
+  if (r.has("wave_maker")) {
+    for (const char* key : {"translation", "rotation"})
+      if (r.has(key))
+        src.fail(r.at(key), fmt::format("{}: a wall's motion is a wave_maker or a translation and rotation; expected one of them",
+                                        r.path_of(key)));
+    read_wave_maker(MapReader(src, r.at("wave_maker"), wave_maker_form), m);
+  }
   MapReader t = r.optional_map("translation", "a translation {type: velocity, velocity} or {type: sine, amplitude, period}");
   if (!t.empty()) {
     const std::string type = t.choice("type", {"velocity", "sine"});
@@ -1452,13 +1501,14 @@ void read_probes(MapReader& top, CaseSpec& spec) {
   const Source& src = top.source();
   std::map<std::string, std::string> names;
   for (const Field& item : top.list("probes", "a list of probes, each {name, type, position, body}", false)) {
-    MapReader r(src, item, "a probe {name, type: pressure | surge_front | column_height | displacement, position, body, frame}");
+    MapReader r(src, item, "a probe {name, type: pressure | surge_front | column_height | wave_gauge | displacement, position, body, frame}");
     ProbeSpec p;
     p.name = unique_name(r, names, "probes");
-    const std::string type = r.choice("type", {"pressure", "surge_front", "column_height", "displacement"});
+    const std::string type = r.choice("type", {"pressure", "surge_front", "column_height", "wave_gauge", "displacement"});
     p.type = type == "pressure"        ? ProbeType::pressure
              : type == "surge_front"   ? ProbeType::surge_front
              : type == "column_height" ? ProbeType::column_height
+             : type == "wave_gauge"    ? ProbeType::wave_gauge
                                        : ProbeType::displacement;
     const std::string position_form = point_form + (p.type == ProbeType::displacement ? " on the body" : "");
     const bool has_position = p.type != ProbeType::surge_front || r.has("position");

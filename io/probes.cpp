@@ -1,5 +1,5 @@
 // Probe evaluation and CSV output. "Up" is the last axis (y in 2D, z in 3D): the floor of surge_front and
-// the height of column_height are along it.
+// the heights of column_height and wave_gauge are along it.
 #include "io/probes.hpp"
 
 #include "core/files.hpp"
@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -26,6 +27,19 @@ Real fluid_extent(const ParticleSet& p, const int axis, const int other, const R
   Real m = -std::numeric_limits<Real>::max();
   for (std::size_t i = 0; i < p.n_owned(); ++i)
     if (p.kind[i] == ParticleKind::fluid && p.position[i][other] < limit) m = std::max(m, p.position[i][axis]);
+  return m;
+}
+
+/// Largest height of the fluid particles whose horizontal coordinates are within dp of the probe's (a strip 2 dp
+/// wide in 2D, a square column 2 dp across in 3D), over this rank's owned particles.
+Real fluid_top(const ParticleSet& p, const Vec& at, const Real dp) {
+  Real m = -std::numeric_limits<Real>::max();
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.kind[i] != ParticleKind::fluid) continue;
+    bool inside = true;
+    for (int a = 0; a < up; ++a) inside = inside && std::abs(p.position[i][a] - at[a]) < dp;
+    if (inside) m = std::max(m, p.position[i][up]);
+  }
   return m;
 }
 }  // namespace
@@ -90,6 +104,9 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t, MPI_
       case ProbeType::column_height:  // largest height of the fluid within 2 dp of the back wall (probe x)
         maxima.push_back(fluid_extent(p, up, 0, probe.spec.position[0] + 2 * dp_));
         break;
+      case ProbeType::wave_gauge:  // the fluid's top at the probe's horizontal position
+        maxima.push_back(fluid_top(p, probe.spec.position, dp_));
+        break;
       case ProbeType::displacement: {
         // Global: x - x0. Tank frame (the tank at rest at t = 0): R(-theta)(x - pivot) - (x0 - pivot).
         Vec d = Vec::Constant(lowest);
@@ -123,6 +140,11 @@ std::vector<Real> ProbeWriter::evaluate(const ParticleSet& p, const Real t, MPI_
       case ProbeType::column_height:  // to the fluid's outer edge: half a particle further
         values.push_back(maxima[km++] + 0.5 * dp_);
         break;
+      case ProbeType::wave_gauge: {  // to the fluid's top edge; dry (no fluid in the column): the probe's height
+        const Real top = maxima[km++];
+        values.push_back(top == lowest ? probe.spec.position[up] : top + 0.5 * dp_);
+        break;
+      }
       case ProbeType::displacement:
         for (int c = 0; c < dim; ++c, ++km)
           values.push_back(maxima[km] == lowest ? std::numeric_limits<Real>::quiet_NaN() : maxima[km]);

@@ -1304,3 +1304,54 @@ TEST(CaseFileErrors, WallMotion) {
                            "tank_motion: {type: sine_roll, pivot: [0.5, 0], amplitude_deg: 4, period: 1.2}\n";
   EXPECT_THAT(error_of(both), HasSubstr("tank_motion.type = sine_roll and wall 'gate' has a motion of its own"));
 }
+
+// Wave makers by stroke and period: a piston translates by S/2 along the direction; a flap turns about its hinge by
+// atan(S / 2d), d the still water level above the hinge, its top moving along the direction first.
+TEST(CaseFile, WaveMaker) {
+  const std::string wall = std::string(minimal_case) +
+                           "walls:\n  - {name: paddle, type: block, rectangle: {min: [0.5, 0], max: [0.52, 0.2]}, motion: MOTION}\n";
+  const auto motion = [&](const std::string& m) { return parse_case(replaced(wall, "MOTION", m), file_name).walls[0].motion; };
+  const WallMotionSpec piston = motion("{wave_maker: {type: piston, stroke: 0.04, period: 1.5}, ramp: 3}");
+  EXPECT_EQ(piston.translation, WallMotionSpec::Translation::sine);
+  EXPECT_EQ(piston.rotation, WallMotionSpec::Rotation::none);
+  EXPECT_DOUBLE_EQ(piston.amplitude[0], 0.02);
+  EXPECT_DOUBLE_EQ(piston.amplitude[1], 0);
+  EXPECT_DOUBLE_EQ(piston.period, 1.5);
+  EXPECT_DOUBLE_EQ(piston.ramp, 3);
+  EXPECT_DOUBLE_EQ(motion("{wave_maker: {type: piston, stroke: 0.04, period: 1.5, direction: [-2, 0]}}").amplitude[0], -0.02);
+  const WallMotionSpec flap =
+      motion("{wave_maker: {type: flap, stroke: 0.1, period: 2, hinge: [0.5, -0.1], water_level: 0.15}}");
+  EXPECT_EQ(flap.translation, WallMotionSpec::Translation::none);
+  EXPECT_EQ(flap.rotation, WallMotionSpec::Rotation::sine);
+  EXPECT_DOUBLE_EQ(flap.pivot[0], 0.5);
+  EXPECT_DOUBLE_EQ(flap.pivot[1], -0.1);
+  EXPECT_DOUBLE_EQ(flap.angle_amplitude, -std::atan(0.05 / 0.25));
+  EXPECT_DOUBLE_EQ(flap.angle_period, 2);
+  // At the quarter period the flap crosses the still water level S/2 along the direction: its point at
+  // sqrt(d^2 + (S/2)^2) above the hinge is there.
+  const Vec x0(0.5, -0.1 + std::hypot(0.25, 0.05));
+  const Vec top = WallMotion(flap).place(x0, 0.5);
+  EXPECT_NEAR(top[0], 0.55, 1e-15);
+  EXPECT_NEAR(top[1], 0.15, 1e-15);
+  const WallMotionSpec back =
+      motion("{wave_maker: {type: flap, stroke: 0.1, period: 2, hinge: [0.5, -0.1], water_level: 0.15, direction: [-1, 0]}}");
+  EXPECT_NEAR(WallMotion(back).place(x0, 0.5)[0], 0.45, 1e-15);
+}
+
+TEST(CaseFileErrors, WaveMaker) {
+  const std::string wall = std::string(minimal_case) +
+                           "walls:\n  - {name: paddle, type: block, rectangle: {min: [0.5, 0], max: [0.52, 0.2]}, motion: MOTION}\n";
+  const auto with = [&](const std::string& motion) { return replaced(wall, "MOTION", motion); };
+  EXPECT_THAT(error_of(with("{wave_maker: {type: piston, stroke: 0.04, period: 1}, translation: {type: velocity, velocity: [0, 1]}}")),
+              HasSubstr("walls[0].motion.translation: a wall's motion is a wave_maker or a translation and rotation"));
+  EXPECT_THAT(error_of(with("{wave_maker: {type: wedge, stroke: 0.04, period: 1}}")), HasSubstr("type = wedge"));
+  EXPECT_THAT(error_of(with("{wave_maker: {type: piston, stroke: 0, period: 1}}")),
+              HasSubstr("stroke = 0: expected the paddle's stroke S > 0 [m]"));
+  EXPECT_THAT(error_of(with("{wave_maker: {type: piston, stroke: 0.04}}")), HasSubstr("missing key 'period'"));
+  EXPECT_THAT(error_of(with("{wave_maker: {type: piston, stroke: 0.04, period: 1, direction: [0, 1]}}")),
+              HasSubstr("direction = [0, 1]: expected a horizontal direction"));
+  EXPECT_THAT(error_of(with("{wave_maker: {type: flap, stroke: 0.04, period: 1, hinge: [0.5, 0.2], water_level: 0.1}}")),
+              HasSubstr("water_level = 0.1: expected a still water level above the hinge (height 0.2 m)"));
+  EXPECT_THAT(error_of(with("{wave_maker: {type: flap, stroke: 0.04, period: 1, water_level: 0.1}}")), HasSubstr("missing key 'hinge'"));
+  EXPECT_THAT(error_of(with("{wave_maker: {type: piston, stroke: 0.04, period: 1, hinge: [0, 0]}}")), HasSubstr("unknown key 'hinge'"));
+}
