@@ -315,7 +315,8 @@ struct WallCell {
 }  // namespace
 
 /// A wall or dummy particle j stands for the lattice cell of side dp around it (the wall's solid region is the union
-/// of these cells); a fluid particle i inside one (|x_i - x_j| < dp/2 along each of the tank's axes) is moved along
+/// of these cells); a fluid particle i inside one or on its boundary (|x_i - x_j| <= dp/2 along each of the tank's
+/// axes: a particle on a face that another wall body covers is still in that body's cells) is moved along
 /// the cell's offset s_j to the wetted surface, to the plane through x_j + s_j normal to s_j. Of the cells that hold
 /// it the one it is deepest in is taken (then the lowest global id), so that the result does not depend on the
 /// order of the neighbours (on the number of ranks). A particle in a corner cell may land in a neighbouring cell:
@@ -334,7 +335,7 @@ std::size_t FluidCore::keep_out_of_walls() {
       if (p.kind[j] != ParticleKind::wall && p.kind[j] != ParticleKind::dummy) continue;
       const Vec d = p.position[i] - p.position[j];
       if (d.squaredNorm() >= reach2) continue;
-      if ((moving ? Vec(wall_rotation(j).transpose() * d) : d).cwiseAbs().maxCoeff() >= half) continue;
+      if ((moving ? Vec(wall_rotation(j).transpose() * d) : d).cwiseAbs().maxCoeff() > half) continue;
       assert(!to_surface[j].isZero() && "every wall and dummy particle has its offset to the surface");
       const Vec s = moving ? Vec(wall_rotation(j) * to_surface[j]) : to_surface[j];
       const Vec n = s.normalized();

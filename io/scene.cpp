@@ -187,6 +187,54 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   scene.counts.push_back(count);
 }
 
+/// A wall particle on an edge or corner of its body (its offset to the surface has two or more components: the
+/// faces at the same distance) whose nearest surface point, that edge or corner, lies on another wall body (a block
+/// standing on the floor, a piston sliding on it) points at its faces that are not covered instead: a fluid particle
+/// put back out of the corner's cell then leaves towards the water, not into the seam between the two bodies,
+/// along which it could slide under the block. A point is covered when it is in the closed cell (side dp) of a
+/// wall or dummy particle of another body. Offsets of other particles, and corners whose faces are all covered
+/// or none, are left as they are.
+void uncover_wall_corners(const Real dp, ParticleSet& p) {
+  if (!p.has_vector_field(wall_surface_field)) return;
+  auto& to_surface = p.vector_field(wall_surface_field);
+  const auto is_wall = [&](const std::size_t i) { return p.kind[i] == ParticleKind::wall || p.kind[i] == ParticleKind::dummy; };
+  const auto cell_of = [&](const Vec& x) { return IVec((x / dp).array().floor().cast<int>()); };
+  const auto less = [](const IVec& a, const IVec& b) {
+    return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
+  };
+  std::vector<std::pair<IVec, std::size_t>> cells;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (is_wall(i)) cells.emplace_back(cell_of(p.position[i]), i);
+  std::sort(cells.begin(), cells.end(), [&](const auto& a, const auto& b) { return less(a.first, b.first); });
+  const Real reach = 0.5 * dp * (1 + 1e-9);
+  const auto covered = [&](const Vec& q, const std::size_t body) {
+    const IVec c = cell_of(q);
+    int n_around = 1;
+    for (int a = 0; a < dim; ++a) n_around *= 3;
+    for (int m = 0; m < n_around; ++m) {  // the 3^dim cells around q's
+      IVec k = c;
+      for (int a = 0, r = m; a < dim; ++a, r /= 3) k[a] += r % 3 - 1;
+      const auto range = std::equal_range(cells.begin(), cells.end(), std::make_pair(k, std::size_t{0}),
+                                          [&](const auto& x, const auto& y) { return less(x.first, y.first); });
+      for (auto it = range.first; it != range.second; ++it)
+        if (p.body[it->second] != body && (q - p.position[it->second]).cwiseAbs().maxCoeff() <= reach) return true;
+    }
+    return false;
+  };
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vec s = to_surface[i];
+    if (!is_wall(i) || (s.array() != 0).count() < 2 || !covered(p.position[i] + s, p.body[i])) continue;
+    Vec open = Vec::Zero();
+    for (int a = 0; a < dim; ++a) {
+      if (s[a] == 0) continue;
+      Vec face = Vec::Zero();
+      face[a] = s[a];
+      if (!covered(p.position[i] + face, p.body[i])) open[a] = s[a];
+    }
+    if (!open.isZero()) to_surface[i] = open;
+  }
+}
+
 /// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart). The particles
 /// sorted by cells of side dp/2 (memory of the particles only, not of a grid over the domain's box).
 void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
@@ -238,6 +286,7 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
     if (scene.particles.clamped[i]) clamped.push_back(static_cast<LocalIndex>(i));
   for (const auto& w : spec.walls) add_wall(spec, w, clamped, scene);
   check_overlap(spec, scene.particles);
+  uncover_wall_corners(spec.dp, scene.particles);
   return scene;
 }
 

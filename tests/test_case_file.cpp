@@ -1202,6 +1202,33 @@ TEST(Scene, CoincidentWallParticlesAreRefused) {
   EXPECT_NO_THROW(build_scene(one, std::nullopt));
 }
 
+// A block standing on the tank's floor: its two lower corner particles point at their side faces, not at the
+// corner on the floor (a fluid particle put back out of the corner cell would land in the seam between block and
+// floor); its upper corners and a free block's corners keep their diagonal offsets, its other particles theirs.
+TEST(Scene, CornersOnAnotherWallPointAtTheirOpenFaces) {
+  const std::string text = std::string(minimal_case) +
+                           "walls:\n  - {name: tank, type: box, rectangle: {min: [0, 0], max: [1, 1]}}\n"
+                           "  - {name: piston, type: block, rectangle: {min: [0.5, 0], max: [0.54, 0.4]}}\n"
+                           "  - {name: free, type: block, rectangle: {min: [0.7, 0.5], max: [0.74, 0.6]}}\n";
+  const Scene scene = build_scene(parse_case(text, file_name));
+  const ParticleSet& p = scene.particles;
+  const auto& s = p.vector_field(wall_surface_field);
+  const auto at = [&](const double x, const double y) {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if ((p.position[i] - Vec(x, y)).norm() < 1e-9) return i;
+    ADD_FAILURE() << "no particle at " << x << ", " << y;
+    return std::size_t{0};
+  };
+  const double h = 0.005;
+  EXPECT_LT((s[at(0.505, 0.005)] - Vec(-h, 0)).norm(), 1e-12);  // lower corners: the side faces
+  EXPECT_LT((s[at(0.535, 0.005)] - Vec(h, 0)).norm(), 1e-12);
+  EXPECT_LT((s[at(0.505, 0.395)] - Vec(-h, h)).norm(), 1e-12);  // upper corners: the corner
+  EXPECT_LT((s[at(0.535, 0.395)] - Vec(h, h)).norm(), 1e-12);
+  EXPECT_LT((s[at(0.515, 0.005)] - Vec(0, -h)).norm(), 1e-12);  // the bottom row between them: the floor face, as built
+  EXPECT_LT((s[at(0.705, 0.505)] - Vec(-h, -h)).norm(), 1e-12);  // a free block's corner
+  EXPECT_LT((s[at(0.005, -0.005)] - Vec(0, h)).norm(), 1e-12);  // the tank's floor
+}
+
 // A body may be a disc (`sphere`) or a cylinder's section instead of a rectangle, a wall a solid disc or cylinder;
 // the scene fills them on the lattice (core/geometry.hpp), `rect` holds their bounds, and count_particles
 // counts them exactly.
