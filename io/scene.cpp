@@ -439,6 +439,33 @@ void check_scene_size(const CaseSpec& spec, const std::optional<std::size_t>& av
                                  spec.file, spec.dp, n, max_scene_particles));
   };
   if (!(cells_total <= max_scene_particles)) throw too_many(cells_total);
+  // Shapes from surfaces are counted by filling them, point by point against the surface: first an estimate
+  // (a body's volume over dp^dim, a wall's cells as above), so that a case far too large for the memory is
+  // refused before that.
+  if (available) {
+    ParticleCounts estimate;
+    bool has_surface = false;
+    for (const auto& b : spec.bodies) {
+      has_surface = has_surface || b.surface;
+      const double count = b.surface ? b.surface->volume() / std::pow(spec.dp, dim) : (b.rect.size() / spec.dp).array().round().prod();
+      (b.kind == BodyKind::solid ? estimate.solid : estimate.fluid) += static_cast<std::size_t>(count);
+    }
+    for (const auto& w : spec.walls) {
+      has_surface = has_surface || w.surface;
+      const Vec c = (w.rect.size() / spec.dp).array().round();
+      const double shell = dim == 2 ? 6 * (c[0] + c[1] + 6)
+                                    : 6 * ((c[0] + 6) * (c[1] + 6) + (c[1] + 6) * (c[dim - 1] + 6) + (c[0] + 6) * (c[dim - 1] + 6));
+      estimate.wall += static_cast<std::size_t>(shell / 3);
+      estimate.dummy += static_cast<std::size_t>(2 * shell / 3);
+    }
+    const double need = static_cast<double>(estimate_memory_bytes(spec, estimate)) + static_cast<double>(program_bytes);
+    if (has_surface && need > static_cast<double>(*available))
+      throw CaseError(fmt::format("{}: dp = {:g}: the case would have about {:.3g} particles and need about {} of memory, but "
+                                  "this machine has {} available (MemAvailable in /proc/meminfo, or less under ulimit -v); "
+                                  "expected a case that fits: a larger dp or smaller bodies and walls",
+                                  spec.file, spec.dp, static_cast<double>(estimate.total()), show_bytes(need),
+                                  show_bytes(static_cast<double>(*available))));
+  }
   const ParticleCounts n = count_particles(spec);
   if (static_cast<double>(n.total()) > max_scene_particles) throw too_many(static_cast<double>(n.total()));
   if (!available) return;

@@ -1160,6 +1160,16 @@ TEST(Scene, TooLargeForTheMachineIsRefusedBeforeAllocating) {
     return std::string("(no error)");
   }(), HasSubstr("dp = 1e-06: the case would have about 4.26e+10 particles; expected at most 1e+09 (a larger dp)"));
   EXPECT_TRUE(available_memory_bytes().has_value());
+  // A polygon body is refused by its area ("about" N particles), before it is filled point by point.
+  const std::string standing_wave = std::string(MPSFSI_TEST_DATA_DIR) + "/../../cases/standing_wave.yaml";
+  const CaseSpec polygon = load_case(standing_wave, {"dp=3e-5"});
+  try {
+    check_scene_size(polygon, std::size_t{8} << 30);
+    ADD_FAILURE() << "no error";
+  } catch (const CaseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("dp = 3e-05: the case would have about 1.34e+08 particles and need about "));
+  }
+  EXPECT_NO_THROW(check_scene_size(load_case(standing_wave), std::size_t{1} << 30));
 }
 
 // A 0.16 m body came out 0.16025 m: build_scene gives the extent the particles represent, and for clamped

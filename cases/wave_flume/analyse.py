@@ -15,9 +15,12 @@ What is measured, per run:
     the first harmonic of the elevation, fitted by least squares with its mean and second harmonic; its height H
     (twice its amplitude) against the theory, and its phase;
   - the wavenumber: the slope of the phases along the gauges (least squares), against the dispersion relation;
+  - the damping: the fit ln H = ln H_0 - delta x along the gauges, printed as the height lost per wavelength and
+    H_0, the height extrapolated to the paddle (x = 0);
   - the reflection: in the last --reflection-window seconds of the run, each gauge's complex first harmonic fitted
-    as an incident and a reflected wave, a_I exp(-ikx) + a_R exp(ikx), by least squares over the gauges;
-    K_r = |a_R| / |a_I|.
+    as an incident and a reflected wave that both decay as they travel, a_I exp(-i k_c u) + a_R exp(i k_c u),
+    k_c = k - i delta, u = x - x_m (x_m the middle of the gauges), by least squares over the gauges;
+    K_r = |a_R| / |a_I| at x_m.
 
 Usage
   mpsfsi run cases/wave_flume.yaml --output out/wave_flume
@@ -117,9 +120,17 @@ def analyse(r, args):
     if len(rows) < 3:
         sys.exit(f"{PROG}: {r['run']}: fewer than 3 gauges have 2 periods of incident waves before the reflection "
                  f"(run longer, or move the gauges nearer the paddle)")
+    # The still water before anything from the paddle can arrive (the long-wave speed sqrt(g h)): its mean level.
+    still = []
+    for name, x in r["gauges"].items():
+        sel = (t > 0) & (t < m["start"] + x / math.sqrt(r["g"] * r["h"]))
+        if sel.sum() >= 5:
+            still.append(float(np.mean(r["eta"][name][sel])))
     xs = np.array([q["x"] for q in rows])
     ph = np.unwrap(np.array([q["phase"] for q in rows]))
     k_meas = float(np.polyfit(xs, ph, 1)[0])
+    slope, intercept = np.polyfit(xs, np.log([q["H"] for q in rows]), 1)  # H ~ H_0 exp(-damping x)
+    damping, H_paddle = -float(slope), math.exp(intercept)
     # The reflection over all gauges in the last window of the run.
     sel = t >= t[-1] - args.reflection_window
     xr = np.array(sorted(r["gauges"].values()))
@@ -128,11 +139,15 @@ def analyse(r, args):
     ready = m["start"] + m["ramp"] + (2 * r["x_end"] - xr.min()) / cg
     if t[-1] - args.reflection_window >= ready and sel.sum() >= 20:
         amps = np.array([harmonics(t[sel], r["eta"][n][sel], omega)[0] for n in names])
-        mat = np.column_stack([np.exp(-1j * k_meas * xr), np.exp(1j * k_meas * xr)])
+        # Both waves decay as they travel (the damping measured in the incident window): k - i damping.
+        kc = k_meas - 1j * damping
+        xm = 0.5 * (xr.min() + xr.max())
+        mat = np.column_stack([np.exp(-1j * kc * (xr - xm)), np.exp(1j * kc * (xr - xm))])
         (aI, aR), *_ = np.linalg.lstsq(mat, amps, rcond=None)
-        refl = dict(Kr=abs(aR) / abs(aI), HI=2 * abs(aI), HR=2 * abs(aR), x=xr, H=2 * np.abs(amps), aI=aI, aR=aR,
-                    window=(t[-1] - args.reflection_window, t[-1]))
-    return dict(kind=kind, S=S, T=T, k=k, kh=kh, H_th=H_th, cg=cg, k_meas=k_meas, rows=rows, refl=refl)
+        refl = dict(Kr=abs(aR) / abs(aI), HI=2 * abs(aI), HR=2 * abs(aR), x=xr, xm=xm, kc=kc, H=2 * np.abs(amps),
+                    aI=aI, aR=aR, window=(t[-1] - args.reflection_window, t[-1]))
+    return dict(kind=kind, S=S, T=T, k=k, kh=kh, H_th=H_th, cg=cg, k_meas=k_meas, damping=damping, H_paddle=H_paddle,
+                rows=rows, refl=refl, still=still)
 
 
 def main():
@@ -140,7 +155,7 @@ def main():
     ap.add_argument("runs", nargs="+", help="output folders of flume runs")
     ap.add_argument("--depth", type=float, help="still water depth h [m] (default: the top of the fluid rectangles)")
     ap.add_argument("--end", type=float, help="x of the still water line at the far end [m] (default: their largest x)")
-    ap.add_argument("--reflection-window", type=float, default=4.0, help="the last seconds of the run for K_r")
+    ap.add_argument("--reflection-window", type=float, default=3.5, help="the last seconds of the run for K_r")
     ap.add_argument("--plot", help="write a figure here (png)")
     ap.add_argument("--check", nargs=2, type=float, metavar=("H_TOL", "K_TOL"),
                     help="exit 1 unless every gauge's H and the wavenumber are within these relative tolerances")
@@ -154,6 +169,9 @@ def main():
         print(f"{run}: dp {r['dp']:g} m (h/dp {r['h'] / r['dp']:.0f}), {q['kind']} S {q['S']:g} m, T {q['T']:g} s, "
               f"h {r['h']:g} m: kh {q['kh']:.4f}, L {2 * math.pi / q['k']:.4f} m, H theory {q['H_th'] * 1000:.2f} mm "
               f"(H/S {q['H_th'] / q['S']:.4f}), c_g {q['cg']:.4f} m/s")
+        if q["still"]:
+            print(f"  the still water before the paddle's first long wave arrives: mean level {min(q['still']) * 1000:+.2f} "
+                  f"to {max(q['still']) * 1000:+.2f} mm at the gauges")
         print("  gauge     x [m]   window [s]     H [mm]   H/H_th   rms residual [mm]")
         worst = 0.0
         for row in q["rows"]:
@@ -166,11 +184,13 @@ def main():
               f"{2 * math.pi / q['k_meas']:.4f} m against {2 * math.pi / q['k']:.4f} m")
         Hm = np.array([row["H"] for row in q["rows"]])
         print(f"  H/H_th over the gauges: mean {Hm.mean() / q['H_th']:.4f}, from {Hm.min() / q['H_th']:.4f} to "
-              f"{Hm.max() / q['H_th']:.4f} (largest deviation {worst * 100:.1f} %)")
+              f"{Hm.max() / q['H_th']:.4f} (largest deviation {worst * 100:.1f} %); height lost per wavelength "
+              f"{(1 - math.exp(-q['damping'] * 2 * math.pi / q['k_meas'])) * 100:.1f} %, H/H_th extrapolated along it to x = 0: "
+              f"{q['H_paddle'] / q['H_th']:.3f}")
         if q["refl"]:
             f = q["refl"]
             print(f"  reflection over t = {f['window'][0]:.2f}-{f['window'][1]:.2f} s: K_r = {f['Kr']:.3f} "
-                  f"(H_I {f['HI'] * 1000:.2f} mm, H_R {f['HR'] * 1000:.2f} mm)")
+                  f"(H_I {f['HI'] * 1000:.2f} mm, H_R {f['HR'] * 1000:.2f} mm at x = {f['xm']:.2f} m)")
         else:
             print(f"  reflection: the run ends before the reflected waves are at every gauge for "
                   f"{a.reflection_window:g} s")
@@ -198,7 +218,8 @@ def plot(results, path):
             f = q["refl"]
             ax[1, 1].plot(f["x"], f["H"] / q["S"], "o", label=lab + f": K_r {f['Kr']:.3f}")
             xx = np.linspace(f["x"].min(), f["x"].max(), 200)
-            ax[1, 1].plot(xx, 2 * np.abs(f["aI"] * np.exp(-1j * q["k_meas"] * xx) + f["aR"] * np.exp(1j * q["k_meas"] * xx))
+            u = xx - f["xm"]
+            ax[1, 1].plot(xx, 2 * np.abs(f["aI"] * np.exp(-1j * f["kc"] * u) + f["aR"] * np.exp(1j * f["kc"] * u))
                           / q["S"], "-", lw=0.8)
     # the elevation at the nearest gauge to the first run's middle gauge
     mid = q0["rows"][len(q0["rows"]) // 2]

@@ -350,3 +350,41 @@ TEST(Probes3d, MeasureAlongZ) {
   EXPECT_NEAR(w[4], 0.31, 1e-12);
   EXPECT_NEAR(w[5], 0.4, 1e-12);
 }
+
+// A flap wave maker in 3D turns about the horizontal hinge line across its direction (e_z x direction), its top
+// moving along the direction first; a piston translates along it.
+TEST(CaseFile3d, WaveMakerTurnsAboutItsHingeLine) {
+  const std::string flap = "walls.step.motion={wave_maker: {type: flap, stroke: 0.1, period: 2, direction: [0, 1, 0], "
+                           "hinge: [0.4, 0, -0.1], water_level: 0.15}}";
+  const WallMotionSpec m = parse_case(case_3d, file_name, {"tank_motion={type: none}", flap}).walls[1].motion;
+  expect_vec(m.axis, -1, 0, 0);  // e_z x e_y
+  EXPECT_DOUBLE_EQ(m.angle_amplitude, std::atan(0.05 / 0.25));
+  const Vec top = WallMotion(m).place(Vec(0.4, 0.0, -0.1 + std::hypot(0.25, 0.05)), 0.5);
+  EXPECT_NEAR(top[1], 0.05, 1e-15);
+  EXPECT_NEAR(top[2], 0.15, 1e-15);
+  const std::string piston = "walls.step.motion={wave_maker: {type: piston, stroke: 0.1, period: 2, direction: [3, 4, 0]}}";
+  expect_vec(parse_case(case_3d, file_name, {"tank_motion={type: none}", piston}).walls[1].motion.amplitude, 0.03, 0.04, 0);
+  EXPECT_THAT(error_of(case_3d, {"tank_motion={type: none}", "walls.step.motion={wave_maker: {type: piston, stroke: 0.1, "
+                                                             "period: 2, direction: [1, 0, 1]}}"}),
+              HasSubstr("direction = [1, 0, 1]: expected a horizontal direction [x, y, z]"));
+}
+
+// A wave gauge in 3D reads the top of the water in a column 2 dp across around its (x, y), and its own height
+// where there is no water.
+TEST(Probes3d, WaveGaugeReadsTheTopAlongZ) {
+  CaseSpec spec = parse_case(case_3d, file_name);
+  ProbeSpec g;
+  g.name = "g";
+  g.type = ProbeType::wave_gauge;
+  g.position = Vec(0.1, 0.1, 0);
+  ProbeSpec dry = g;
+  dry.name = "dry";
+  dry.position = Vec(0.3, 0.1, 0.01);
+  spec.probes = {g, dry};
+  Scene scene = build_scene(spec, std::nullopt);
+  const ProbeWriter probes(spec, scene.particles, "");
+  const std::vector<Real> v = probes.evaluate(scene.particles, 0);
+  ASSERT_EQ(v.size(), 2u);
+  EXPECT_NEAR(v[0], 0.4, 1e-12);  // the column's top
+  EXPECT_DOUBLE_EQ(v[1], 0.01);
+}

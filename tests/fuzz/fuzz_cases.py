@@ -541,6 +541,11 @@ def load_cases(cases_dir):
             w = s.get("wavelet", {})
             if isinstance(w.get("file"), str) and not os.path.isabs(w["file"]):
                 w["file"] = os.path.abspath(os.path.join(cases_dir, w["file"]))
+        for item in (tree.get("bodies", []) or []) + (tree.get("walls", []) or []):
+            for key in ("polygon", "surface"):
+                shape = item.get(key) if isinstance(item, dict) else None
+                if isinstance(shape, dict) and isinstance(shape.get("file"), str) and not os.path.isabs(shape["file"]):
+                    shape["file"] = os.path.abspath(os.path.join(cases_dir, shape["file"]))
         cases.append((name, tree))
     return cases
 
