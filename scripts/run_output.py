@@ -1,9 +1,10 @@
 """Reading the output folder of an mpsfsi run, shared by the analysis scripts (hydrostatic_check.py,
 density_error.py, flow_check.py): its frames (particles_NNNNNN.vtu on one rank, particles_NNNNNN.pvtu with
 their pieces on several), one frame's points and point fields, the frames a --frames option picks, their
-times (particles.pvd) and the resolved case (case.resolved.yaml). Errors exit with a message that names the
+times (particles.pvd), the resolved case (case.resolved.yaml) and the probe table (probes.csv). Errors exit with a message that names the
 calling script.
 """
+import csv
 import glob
 import os
 import re
@@ -66,3 +67,16 @@ def read_case(run, prog):
             return yaml.safe_load(f)
     except OSError as e:
         sys.exit(f"{prog}: cannot read {path}: {e}")
+
+
+def read_probes(run, prog):
+    """The run's probes.csv as a dict of columns (lists of floats, "time" among them); exits if it is unreadable."""
+    path = os.path.join(run, "probes.csv")
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        sys.exit(f"{prog}: cannot read {path}: {e}")
+    if not rows:
+        sys.exit(f"{prog}: {path} holds no rows")
+    return {k: [float(r[k]) for r in rows] for k in rows[0]}

@@ -19,7 +19,6 @@ the case, h is --depth (default 0.2 m). With --check TOL it exits 1 unless the p
 theory (relative).
 """
 import argparse
-import csv
 import math
 import os
 import sys
@@ -28,7 +27,7 @@ import numpy as np
 from scipy.optimize import curve_fit
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
-from run_output import read_case  # noqa: E402
+from run_output import read_case, read_probes  # noqa: E402
 
 PROG = "standing_wave/analyse.py"
 
@@ -53,19 +52,12 @@ def analyse_run(run, a):
     lo, hi = tanks[0]["rectangle"]["min"], tanks[0]["rectangle"]["max"]
     length = float(hi[0]) - float(lo[0])
     depth = a.depth
-    if depth is None:
-        sys.exit(f"{PROG}: give --depth (the still water depth)")
     gauges = [p["name"] for p in case.get("probes", []) if p.get("type") == "wave_gauge"]
     if len(gauges) < 2:
         sys.exit(f"{PROG}: {run}: fewer than 2 wave_gauge probes")
-    path = os.path.join(run, "probes.csv")
-    try:
-        with open(path, newline="") as f:
-            rows = list(csv.DictReader(f))
-    except OSError as e:
-        sys.exit(f"{PROG}: cannot read {path}: {e}")
-    t = np.array([float(r["time"]) for r in rows])
-    e = (np.array([float(r[gauges[0]]) for r in rows]) - np.array([float(r[gauges[-1]]) for r in rows])) / 2
+    probes = read_probes(run, PROG)
+    t = np.array(probes["time"])
+    e = (np.array(probes[gauges[0]]) - np.array(probes[gauges[-1]])) / 2
     k = math.pi / length
     omega = math.sqrt(g * k * math.tanh(k * depth))
     sel = t <= a.until

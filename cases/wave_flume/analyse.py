@@ -31,7 +31,6 @@ the run's moving wall with a wave_maker (case.resolved.yaml). With --check H_TOL
 gauge's H is within H_TOL of the theory (relative) and k within K_TOL.
 """
 import argparse
-import csv
 import math
 import os
 import sys
@@ -40,7 +39,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
-from run_output import read_case  # noqa: E402
+from run_output import read_case, read_probes  # noqa: E402
 
 PROG = "wave_flume/analyse.py"
 
@@ -88,14 +87,9 @@ def read_run(run, args):
     gauges = {p["name"]: float(p["position"][0]) for p in case.get("probes", []) if p.get("type") == "wave_gauge"}
     if len(gauges) < 3:
         sys.exit(f"{PROG}: {run}: fewer than 3 wave_gauge probes")
-    path = os.path.join(run, "probes.csv")
-    try:
-        with open(path, newline="") as f:
-            rows = list(csv.DictReader(f))
-    except OSError as e:
-        sys.exit(f"{PROG}: cannot read {path}: {e}")
-    t = np.array([float(r["time"]) for r in rows])
-    series = {n: np.array([float(r[n]) for r in rows]) - h for n in gauges}
+    probes = read_probes(run, PROG)
+    t = np.array(probes["time"])
+    series = {n: np.array(probes[n]) - h for n in gauges}
     return dict(run=run, dp=float(case["dp"]), g=g, h=h, x_end=x_end, maker=maker, gauges=gauges, t=t, eta=series)
 
 
