@@ -1,4 +1,4 @@
-// Prescribed tank roll: sine or measured angle table (linear interpolation, centred-difference omega);
+// Prescribed tank roll: sine or measured angle table (TableSeries: linear interpolation, centred-difference omega);
 // rigid rotation about the pivot (about the z axis through the pivot in 3D) with core/rotation.hpp; the
 // reader of the case files' time tables (tank motion, wavelets).
 #include "core/tank_motion.hpp"
@@ -14,6 +14,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace mpsfsi {
 
@@ -119,33 +120,53 @@ void read_angle_table(const std::string& path, TankMotionParams& params) {
   for (auto& a : params.angle) a *= pi / 180;
 }
 
+TableSeries::TableSeries(std::vector<Real> time, std::vector<Real> value, const Real half_window)
+    : time_(std::move(time)), value_(std::move(value)), half_window_(half_window) {
+  if (time_.size() < 2 || value_.size() != time_.size())
+    throw std::invalid_argument("a table needs at least two rows and as many values as times");
+  for (std::size_t k = 1; k < time_.size(); ++k)
+    if (!(time_[k] > time_[k - 1])) throw std::invalid_argument("table times must increase");
+  if (!(half_window_ > 0)) throw std::invalid_argument("the half window must be positive");
+}
+
+Real TableSeries::value(const Real t) const {
+  if (t <= time_.front()) return value_.front();
+  if (t >= time_.back()) return value_.back();
+  const auto k = static_cast<std::size_t>(std::upper_bound(time_.begin(), time_.end(), t) - time_.begin()) - 1;
+  const Real s = (t - time_[k]) / (time_[k + 1] - time_[k]);
+  return value_[k] + s * (value_[k + 1] - value_[k]);
+}
+
+Real TableSeries::rate(const Real t) const {
+  if (empty() || t < time_.front() || t > time_.back()) return 0;
+  const Real lo = std::max(t - half_window_, time_.front()), hi = std::min(t + half_window_, time_.back());
+  if (!(hi > lo)) return 0;
+  return (value(hi) - value(lo)) / (hi - lo);
+}
+
+Real TableSeries::largest_rate() const {
+  Real largest = 0;
+  for (std::size_t k = 1; k < time_.size(); ++k)
+    largest = std::max(largest, std::abs(value_[k] - value_[k - 1]) / (time_[k] - time_[k - 1]));
+  return largest;
+}
+
 TankMotion::TankMotion(TankMotionParams params) : params_(std::move(params)) {
   using Type = TankMotionParams::Type;
   if (params_.type == Type::sine_roll && !(params_.period > 0))
     throw std::invalid_argument("TankMotion: sine_roll needs a positive period");
   if (params_.type != Type::table) return;
-  const auto& t = params_.time;
-  if (t.size() < 2 || params_.angle.size() != t.size())
-    throw std::invalid_argument("TankMotion: a table needs at least two rows and as many angles as times");
-  for (std::size_t k = 1; k < t.size(); ++k)
-    if (!(t[k] > t[k - 1])) throw std::invalid_argument("TankMotion: table times must increase");
-  if (!(params_.derivative_half_window > 0)) throw std::invalid_argument("TankMotion: the half window must be positive");
-}
-
-Real TankMotion::interpolate(const Real t) const {
-  const auto& ts = params_.time;
-  const auto& a = params_.angle;
-  if (t <= ts.front()) return a.front();
-  if (t >= ts.back()) return a.back();
-  const auto k = static_cast<std::size_t>(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin()) - 1;
-  const Real s = (t - ts[k]) / (ts[k + 1] - ts[k]);
-  return a[k] + s * (a[k + 1] - a[k]);
+  try {
+    table_ = TableSeries(params_.time, params_.angle, params_.derivative_half_window);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("TankMotion: ") + e.what());
+  }
 }
 
 Real TankMotion::angle(const Real t) const {
   switch (params_.type) {
     case TankMotionParams::Type::sine_roll: return params_.amplitude * std::sin(2 * pi * t / params_.period);
-    case TankMotionParams::Type::table: return interpolate(t);
+    case TankMotionParams::Type::table: return table_.value(t);
     case TankMotionParams::Type::none: break;
   }
   return 0;
@@ -157,14 +178,7 @@ Real TankMotion::angular_velocity(const Real t) const {
       const Real w = 2 * pi / params_.period;
       return params_.amplitude * w * std::cos(w * t);
     }
-    case TankMotionParams::Type::table: {
-      const auto& ts = params_.time;
-      if (t < ts.front() || t > ts.back()) return 0;
-      const Real h = params_.derivative_half_window;
-      const Real lo = std::max(t - h, ts.front()), hi = std::min(t + h, ts.back());
-      if (!(hi > lo)) return 0;
-      return (interpolate(hi) - interpolate(lo)) / (hi - lo);
-    }
+    case TankMotionParams::Type::table: return table_.rate(t);
     case TankMotionParams::Type::none: break;
   }
   return 0;

@@ -42,6 +42,29 @@ struct TimeTable {
   std::vector<Real> time, value;
 };
 
+/// A measured series: values at increasing times and, between them, their linear interpolant. value(t) is the
+/// first value before the first time and the last after the last. rate(t) is the centred difference
+/// (value(t + h) - value(t - h)) / 2h over the interpolant, i.e. its exact derivative averaged over [t - h, t + h]
+/// (the window clipped to the table; zero outside it). The tank's measured roll and the walls' motion tables use it.
+class TableSeries {
+ public:
+  TableSeries() = default;
+  /// Throws std::invalid_argument for fewer than two rows, unequal columns, times that do not increase, or a
+  /// half window h that is not positive.
+  TableSeries(std::vector<Real> time, std::vector<Real> value, Real half_window);
+  bool empty() const { return time_.empty(); }
+  Real value(Real t) const;
+  Real rate(Real t) const;
+  Real first_time() const { return time_.front(); }
+  Real last_time() const { return time_.back(); }
+  /// The largest |rate| of the interpolant, max_k |v_k+1 - v_k| / (t_k+1 - t_k) (rate(t) never exceeds it).
+  Real largest_rate() const;
+
+ private:
+  std::vector<Real> time_, value_;
+  Real half_window_ = 0;
+};
+
 /// What read_time_table accepts in the value column.
 struct TimeTableColumn {
   std::string name = "value";                           ///< for messages, e.g. "angle [deg]"
@@ -59,7 +82,8 @@ class TableError : public std::runtime_error {
 constexpr std::uintmax_t max_table_bytes = 16u << 20;
 constexpr std::size_t max_table_rows = 1000000;
 
-/// Reads the one table format of the case files (tank_motion.file, sources[].wavelet.file): CSV (or
+/// Reads the one table format of the case files (tank_motion.file, sources[].wavelet.file, the walls' motion
+/// tables): CSV (or
 /// whitespace-separated) rows of time [s], value; '#' comments, empty lines and one header line before the
 /// data are skipped; every other line must be two plain decimal numbers. At least two rows, times strictly
 /// increasing. Throws TableError for a missing or non-regular file (a FIFO or device would block or never
@@ -132,8 +156,8 @@ class TankMotion {
   Vec to_tank_frame(const Vec& x, Real theta) const;
 
  private:
-  Real interpolate(Real t) const;
   TankMotionParams params_;
+  TableSeries table_;  ///< table: params_.time and params_.angle
 };
 
 /// The tank motion of a case; a table is the one read and checked when the case was parsed.

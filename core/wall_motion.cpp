@@ -36,6 +36,22 @@ std::pair<T, T> ramped_sine(const T& amplitude, const Real period, const Real ta
 
 }  // namespace
 
+WallMotion::WallMotion(const WallMotionSpec& spec) : s_(spec) {
+  if (s_.translation == WallMotionSpec::Translation::table)
+    translation_table_ = TableSeries(s_.table_time, s_.table_value, s_.table_half_window);
+  if (s_.rotation == WallMotionSpec::Rotation::table) angle_table_ = TableSeries(s_.angle_time, s_.angle_value, s_.angle_half_window);
+}
+
+namespace {
+
+/// r(tau) (s(tau) - s(0)) and its rate, s a table's series.
+std::pair<Real, Real> ramped_table(const TableSeries& s, const Real tau, const Real ramp) {
+  const Real change = s.value(tau) - s.value(0);
+  return {ramp_factor(tau, ramp) * change, ramp_rate(tau, ramp) * change + ramp_factor(tau, ramp) * s.rate(tau)};
+}
+
+}  // namespace
+
 Real WallMotion::tau(const Real t) const { return std::max(Real(0), std::min(t, s_.stop) - s_.start); }
 
 std::pair<Vec, Vec> WallMotion::translation(const Real t) const {
@@ -48,6 +64,10 @@ std::pair<Vec, Vec> WallMotion::translation(const Real t) const {
       const auto [d, v] = ramped_sine(s_.amplitude, s_.period, tau(t), s_.ramp);
       return {d, running(t) ? v : zero};
     }
+    case WallMotionSpec::Translation::table: {
+      const auto [d, v] = ramped_table(translation_table_, tau(t), s_.ramp);
+      return {d * s_.direction, running(t) ? Vec(v * s_.direction) : zero};
+    }
   }
   return {zero, zero};
 }
@@ -57,13 +77,22 @@ Vec WallMotion::displacement(const Real t) const { return translation(t).first; 
 Vec WallMotion::translation_velocity(const Real t) const { return translation(t).second; }
 
 Real WallMotion::angle(const Real t) const {
-  if (s_.rotation == WallMotionSpec::Rotation::none) return 0;
-  return ramped_sine(s_.angle_amplitude, s_.angle_period, tau(t), s_.ramp).first;
+  switch (s_.rotation) {
+    case WallMotionSpec::Rotation::none: return 0;
+    case WallMotionSpec::Rotation::sine: return ramped_sine(s_.angle_amplitude, s_.angle_period, tau(t), s_.ramp).first;
+    case WallMotionSpec::Rotation::table: return ramped_table(angle_table_, tau(t), s_.ramp).first;
+  }
+  return 0;
 }
 
 Real WallMotion::angular_velocity(const Real t) const {
-  if (s_.rotation == WallMotionSpec::Rotation::none || !running(t)) return 0;
-  return ramped_sine(s_.angle_amplitude, s_.angle_period, tau(t), s_.ramp).second;
+  if (!running(t)) return 0;
+  switch (s_.rotation) {
+    case WallMotionSpec::Rotation::none: return 0;
+    case WallMotionSpec::Rotation::sine: return ramped_sine(s_.angle_amplitude, s_.angle_period, tau(t), s_.ramp).second;
+    case WallMotionSpec::Rotation::table: return ramped_table(angle_table_, tau(t), s_.ramp).second;
+  }
+  return 0;
 }
 
 Mat WallMotion::matrix(const Real t) const {

@@ -6,25 +6,36 @@
 //   translation `velocity`: d' = V r(tau), r the smooth ramp of core/ramp.hpp over `ramp` (a constant velocity
 //                           after it), d its exact integral;
 //   translation `sine`:     d = A r(tau) sin(2 pi tau / T);
-//   rotation `sine`:        theta = a r(tau) sin(2 pi tau / T_r).
+//   rotation `sine`:        theta = a r(tau) sin(2 pi tau / T_r);
+//   translation `table`:    d = r(tau) (s(tau) - s(0)) e, s a measured displacement along the direction e
+//                           (core/tank_motion.hpp TableSeries: linear between the rows, the velocity its centred
+//                           difference over a window), table times counted from `start`;
+//   rotation `table`:       theta = r(tau) (a(tau) - a(0)), a a measured angle, likewise.
+// A table moves the wall by its change since tau = 0, so that the wall starts where its body is.
 // The fluid moves each wall body's particles with its motion (fluid/fluid_core.cpp); knows nothing of case files
 // (io/case_file.cpp fills WallMotionSpec).
 #pragma once
 
+#include "core/tank_motion.hpp"
 #include "core/types.hpp"
 
 #include <limits>
 #include <utility>
+#include <vector>
 
 namespace mpsfsi {
 
 struct WallMotionSpec {
-  enum class Translation { none, velocity, sine };
-  enum class Rotation { none, sine };
+  enum class Translation { none, velocity, sine, table };
+  enum class Rotation { none, sine, table };
   Translation translation = Translation::none;
   Vec velocity = Vec::Zero();   ///< velocity: the velocity after the ramp [m/s]
   Vec amplitude = Vec::Zero();  ///< sine: the displacement's amplitude [m]
   Real period = 1;              ///< sine: the translation's period [s]
+  Vec direction = Vec::UnitX(); ///< table: the translation's direction, normalised
+  std::vector<Real> table_time;   ///< translation table: times [s] from `start`, increasing ...
+  std::vector<Real> table_value;  ///< ... and the displacement along `direction` [m]
+  Real table_half_window = 0.025; ///< translation table: the velocity's centred-difference half window [s]
   Rotation rotation = Rotation::none;
   Vec pivot = Vec::Zero();      ///< the rotation's centre at rest [m]
 #if MPSFSI_DIM == 3
@@ -32,6 +43,9 @@ struct WallMotionSpec {
 #endif
   Real angle_amplitude = 0;     ///< rotation sine: amplitude [rad]
   Real angle_period = 1;        ///< rotation sine: period [s]
+  std::vector<Real> angle_time;   ///< rotation table: times [s] from `start`, increasing ...
+  std::vector<Real> angle_value;  ///< ... and the angle [rad]
+  Real angle_half_window = 0.025; ///< rotation table: the angular velocity's centred-difference half window [s]
   Real start = 0;               ///< the motion starts [s]
   Real ramp = 0;                ///< the velocity (velocity) or the amplitudes (sine) rise over this time [s]
   Real stop = std::numeric_limits<Real>::infinity();  ///< the motion stops, the wall stays where it is [s]
@@ -53,7 +67,8 @@ struct WallMotionState {
 class WallMotion {
  public:
   WallMotion() = default;
-  explicit WallMotion(const WallMotionSpec& spec) : s_(spec) {}
+  /// Throws std::invalid_argument for a table that TableSeries refuses.
+  explicit WallMotion(const WallMotionSpec& spec);
   bool moving() const { return s_.moving(); }
   const WallMotionSpec& spec() const { return s_; }
 
@@ -78,6 +93,7 @@ class WallMotion {
   Real tau(Real t) const;
   bool running(Real t) const { return t > s_.start && t < s_.stop; }
   WallMotionSpec s_;
+  TableSeries translation_table_, angle_table_;  ///< the tables, when the motion has them
 };
 
 }  // namespace mpsfsi

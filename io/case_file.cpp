@@ -791,6 +791,27 @@ fs::path resolve(const fs::path& base_dir, const std::string& file) {
   return fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
 }
 
+/// A file named in the case: its path as given (absolute, or relative to the case file's directory: what the
+/// messages show) and where the key is.
+struct FileKey {
+  fs::path path;
+  Field field;
+  /// Once the file has been read: the case's node names it by its absolute path, so that case.resolved.yaml names
+  /// the same file wherever it is read from.
+  void name_absolute() const {
+    std::error_code ec;
+    const fs::path absolute = fs::absolute(path, ec).lexically_normal();
+    if (ec) return;
+    YAML::Node node = field.node;
+    node = absolute.string();
+  }
+};
+
+FileKey file_key(MapReader& r, const std::string& key, const fs::path& base_dir, const std::string& form) {
+  const fs::path path = resolve(base_dir, r.text(key, form));
+  return {path, r.at(key)};
+}
+
 /// The key of a body or wall given by a closed surface: an STL or OBJ file in 3D, a polygon in 2D.
 const std::string surface_key = dim == 2 ? "polygon" : "surface";
 const std::string surface_form =
@@ -835,10 +856,11 @@ std::shared_ptr<const ClosedSurface> read_surface(MapReader& r, const fs::path& 
       m.finish();
       surface = ClosedSurface::from_polygon(std::move(points), t);
     } else {
-      const std::string file = m.text("file", "the path of " + std::string(dim == 2 ? "a text file of x y lines" : "an STL or OBJ file") +
-                                                  ", relative to the case file");
+      const FileKey file = file_key(m, "file", base_dir, "the path of " + std::string(dim == 2 ? "a text file of x y lines" : "an STL or OBJ file") +
+                                                             ", relative to the case file");
       m.finish();
-      surface = ClosedSurface::from_file(resolve(base_dir, file).string(), t);
+      surface = ClosedSurface::from_file(file.path.string(), t);
+      file.name_absolute();
     }
     return surface;
   } catch (const SurfaceError& e) {
@@ -853,9 +875,29 @@ struct GeometryFields {
 
 const std::string wall_motion_form =
     "a motion {translation: {type: velocity, velocity: " + components() + "} or {type: sine, amplitude: " + components() +
-    ", period}, rotation: {type: sine, pivot: " + components() + (dim == 3 ? ", axis: [x, y, z]" : "") +
-    ", amplitude_deg, period}, start, ramp, stop} or {wave_maker: {type: piston | flap, stroke, period, direction, "
+    ", period} or {type: table, file, direction}, rotation: {type: sine, pivot: " + components() +
+    (dim == 3 ? ", axis: [x, y, z]" : "") + ", amplitude_deg, period} or {type: table, file, pivot" +
+    (dim == 3 ? ", axis" : "") + "}, start, ramp, stop} or {wave_maker: {type: piston | flap, stroke, period, direction, "
     "hinge, water_level}, start, ramp, stop} (times in s)";
+
+TimeTable read_table(const Source& src, const Field& f, const fs::path& path, const TimeTableColumn& column);
+
+/// A wall's motion table (translation or rotation `type: table`): `file` (relative to the case file) and the
+/// velocities' `half_window`; the rows' times from `start`. A translation's table may change by at most
+/// max_speed between two rows.
+std::pair<TimeTable, Real> read_motion_table(MapReader& r, const fs::path& base_dir, const TimeTableColumn& column,
+                                             const bool translation) {
+  const Source& src = r.source();
+  const FileKey file = file_key(r, "file", base_dir, fmt::format("the path of a CSV file of time [s] (from start), {}, relative to the case file", column.name));
+  TimeTable table = read_table(src, file.field, file.path, column);
+  const Real h = r.number("half_window", 0.025, positive,
+                          "a positive time [s]: the half width of the centred difference that gives the velocity (default 0.025)");
+  const Real speed = TableSeries(table.time, table.value, h).largest_rate();
+  if (translation && !(speed <= max_speed))
+    src.expected(file.field, fmt::format("a table whose displacement changes at most {:g} m/s (it changes at {:.4g} m/s)", max_speed, speed));
+  file.name_absolute();
+  return {std::move(table), h};
+}
 
 const std::string wave_maker_form = "a wave maker {type: piston | flap, stroke, period, direction, hinge, water_level}";
 
@@ -900,7 +942,7 @@ void read_wave_maker(MapReader w, WallMotionSpec& m) {
 
 /// A wall's own motion (core/wall_motion.hpp): a translation, a rotation or both, from `start`, ramped up over
 /// `ramp`, frozen at `stop`.
-WallMotionSpec read_wall_motion(MapReader r) {
+WallMotionSpec read_wall_motion(MapReader r, const fs::path& base_dir) {
   const Source& src = r.source();
   WallMotionSpec m;
   if (r.has("wave_maker")) {
@@ -910,10 +952,21 @@ WallMotionSpec read_wall_motion(MapReader r) {
                                         r.path_of(key)));
     read_wave_maker(MapReader(src, r.at("wave_maker"), wave_maker_form), m);
   }
-  MapReader t = r.optional_map("translation", "a translation {type: velocity, velocity} or {type: sine, amplitude, period}");
+  MapReader t = r.optional_map("translation", "a translation {type: velocity, velocity} or {type: sine, amplitude, period} "
+                                              "or {type: table, file, direction}");
   if (!t.empty()) {
-    const std::string type = t.choice("type", {"velocity", "sine"});
-    if (type == "velocity") {
+    const std::string type = t.choice("type", {"velocity", "sine", "table"});
+    if (type == "table") {
+      m.translation = WallMotionSpec::Translation::table;
+      const std::string direction_form = "a non-zero direction " + components() + " (normalised): the wall moves along it by the table's displacement";
+      m.direction = t.vec("direction", direction_form);
+      if (!(m.direction.norm() > 0 && std::isfinite(m.direction.norm()))) src.expected(t.at("direction"), direction_form);
+      m.direction.normalize();
+      auto [table, h] = read_motion_table(t, base_dir, {"displacement [m]", 1e3, "a displacement in (-1000, 1000) m"}, true);
+      m.table_time = std::move(table.time);
+      m.table_value = std::move(table.value);
+      m.table_half_window = h;
+    } else if (type == "velocity") {
       m.translation = WallMotionSpec::Translation::velocity;
       m.velocity = t.vec("velocity", "the velocity " + components("v") + " in m/s after the ramp");
       if (!(m.velocity.norm() <= max_speed))
@@ -926,10 +979,10 @@ WallMotionSpec read_wall_motion(MapReader r) {
     }
     t.finish();
   }
-  MapReader q = r.optional_map("rotation", "a rotation {type: sine, pivot, amplitude_deg, period}");
+  MapReader q = r.optional_map("rotation", "a rotation {type: sine, pivot, amplitude_deg, period} or {type: table, file, pivot}");
   if (!q.empty()) {
-    q.choice("type", {"sine"});
-    m.rotation = WallMotionSpec::Rotation::sine;
+    const bool table = q.choice("type", {"sine", "table"}) == "table";
+    m.rotation = table ? WallMotionSpec::Rotation::table : WallMotionSpec::Rotation::sine;
     m.pivot = q.vec("pivot", point_form + " (the centre of the rotation at rest)");
 #if MPSFSI_DIM == 3
     const std::string axis_form = "a non-zero rotation axis [x, y, z] through the pivot (default [0, 0, 1]; normalised)";
@@ -937,9 +990,17 @@ WallMotionSpec read_wall_motion(MapReader r) {
     if (!(m.axis.norm() > 0)) src.expected(q.at("axis"), axis_form);
     m.axis.normalize();
 #endif
-    m.angle_amplitude = q.number("amplitude_deg", in_open(-90, 90), "a number of degrees in (-90, 90) (the amplitude)") * pi / 180;
-    m.angle_period = q.number("period", positive, "a positive period [s]");
-    if (m.angle_period < min_period) src.expected(q.at("period"), fmt::format("a period of at least {:g} s", min_period));
+    if (table) {
+      auto [rows, h] = read_motion_table(q, base_dir, angle_table_column(), false);
+      for (auto& a : rows.value) a *= pi / 180;
+      m.angle_time = std::move(rows.time);
+      m.angle_value = std::move(rows.value);
+      m.angle_half_window = h;
+    } else {
+      m.angle_amplitude = q.number("amplitude_deg", in_open(-90, 90), "a number of degrees in (-90, 90) (the amplitude)") * pi / 180;
+      m.angle_period = q.number("period", positive, "a positive period [s]");
+      if (m.angle_period < min_period) src.expected(q.at("period"), fmt::format("a period of at least {:g} s", min_period));
+    }
     q.finish();
   }
   m.start = r.number("start", 0, non_negative, "a time >= 0 [s] (the motion starts)");
@@ -1036,7 +1097,7 @@ void read_walls(MapReader& top, CaseSpec& spec, std::map<std::string, std::strin
     } else {
       w.rect = r.rect("rectangle", rect_form + (w.type == WallType::box ? " (inner, wetted side of the box)" : " (the block)"));
     }
-    if (r.has("motion")) w.motion = read_wall_motion(MapReader(src, r.at("motion"), wall_motion_form));
+    if (r.has("motion")) w.motion = read_wall_motion(MapReader(src, r.at("motion"), wall_motion_form), base_dir);
     if (w.type == WallType::box) w.open_top = r.boolean("open_top", true, "true or false (box without a lid)");
     if (w.type == WallType::surface && w.fluid_inside)
       w.open_top = r.boolean("open_top", false, "true or false (no wall layers above the surface's top: a tank without a lid)");
@@ -1200,10 +1261,10 @@ void read_tank_motion(MapReader r, const fs::path& base_dir, CaseSpec& spec) {
 #if MPSFSI_DIM == 3
     read_roll_axis(r, m);
 #endif
-    const std::string file = r.text("file", "the path of a CSV file of time [s], angle [deg], relative to the case file");
-    const fs::path path = resolve(base_dir, file);
-    m.file = path.string();
-    TimeTable table = read_table(src, r.at("file"), path, angle_table_column());
+    const FileKey file = file_key(r, "file", base_dir, "the path of a CSV file of time [s], angle [deg], relative to the case file");
+    m.file = file.path.string();
+    TimeTable table = read_table(src, file.field, file.path, angle_table_column());
+    file.name_absolute();
     m.time = std::move(table.time);
     m.angle = std::move(table.value);
     for (auto& a : m.angle) a *= pi / 180;
@@ -1445,10 +1506,10 @@ void read_wavelet(MapReader r, const fs::path& base_dir, WaveletSpec& w) {
   const std::string type = r.choice("type", {"gaussian_derivative", "ricker", "gaussian", "table"});
   if (type == "table") {
     w.type = WaveletType::table;
-    const std::string file = r.text("file", "the path of a CSV file of time [s], value, relative to the case file");
-    const fs::path path = resolve(base_dir, file);
-    w.file = path.string();
-    TimeTable table = read_table(r.source(), r.at("file"), path, TimeTableColumn{});
+    const FileKey file = file_key(r, "file", base_dir, "the path of a CSV file of time [s], value, relative to the case file");
+    w.file = file.path.string();
+    TimeTable table = read_table(r.source(), file.field, file.path, TimeTableColumn{});
+    file.name_absolute();
     w.time = std::move(table.time);
     w.value = std::move(table.value);
   } else {

@@ -23,6 +23,7 @@
 
 using namespace mpsfsi;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using ::testing::StartsWith;
 
 namespace {
@@ -1391,4 +1392,74 @@ TEST(CaseFileErrors, WaveMaker) {
               HasSubstr("water_level = 0.1: expected a still water level above the hinge (height 0.2 m)"));
   EXPECT_THAT(error_of(with("{wave_maker: {type: flap, stroke: 0.04, period: 1, water_level: 0.1}}")), HasSubstr("missing key 'hinge'"));
   EXPECT_THAT(error_of(with("{wave_maker: {type: piston, stroke: 0.04, period: 1, hinge: [0, 0]}}")), HasSubstr("unknown key 'hinge'"));
+}
+
+/// The error of load_case on dir/case.yaml holding `text`.
+std::string load_error_of(const fs::path& dir, const std::string& text) {
+  std::ofstream(dir / "case.yaml") << text;
+  try {
+    load_case((dir / "case.yaml").string());
+  } catch (const CaseError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// Motion tables: a translation along a direction and a rotation about a pivot, each from a CSV file relative to
+// the case file (time from start, displacement in m or angle in degrees); case.resolved.yaml names the files by
+// their absolute paths, so that it runs from any folder.
+TEST(CaseFile, WallMotionTables) {
+  const TempDir dir("mpsfsi_test_case_file_wall_tables");
+  std::ofstream(dir.path / "paddle.csv") << "# time [s], displacement [m]\n0, 0\n0.5, 0.01\n1.0, 0\n";
+  std::ofstream(dir.path / "flap.csv") << "0, 0\n1, 5\n";
+  const std::string text = std::string(minimal_case) +
+                           "walls:\n  - {name: paddle, type: block, rectangle: {min: [0.5, 0], max: [0.52, 0.2]}, motion: "
+                           "{translation: {type: table, file: paddle.csv, direction: [2, 0]}, rotation: {type: table, file: "
+                           "flap.csv, pivot: [0.5, 0], half_window: 0.01}, start: 0.2}}\n";
+  std::ofstream(dir.path / "case.yaml") << text;
+  const CaseSpec spec = load_case((dir.path / "case.yaml").string());
+  const WallMotionSpec& m = spec.walls[0].motion;
+  EXPECT_EQ(m.translation, WallMotionSpec::Translation::table);
+  EXPECT_EQ(m.direction, Vec::UnitX());
+  EXPECT_EQ(m.table_time, (std::vector<Real>{0, 0.5, 1.0}));
+  EXPECT_EQ(m.table_value, (std::vector<Real>{0, 0.01, 0}));
+  EXPECT_DOUBLE_EQ(m.table_half_window, 0.025);
+  EXPECT_EQ(m.rotation, WallMotionSpec::Rotation::table);
+  EXPECT_EQ(m.angle_time, (std::vector<Real>{0, 1}));
+  EXPECT_DOUBLE_EQ(m.angle_value[1], 5 * deg);
+  EXPECT_DOUBLE_EQ(m.angle_half_window, 0.01);
+  EXPECT_DOUBLE_EQ(m.start, 0.2);
+  EXPECT_NEAR(WallMotion(m).displacement(0.45)[0], 0.005, 1e-15);
+  // The resolved case names both files by absolute paths and reads back to the same motion from elsewhere.
+  const std::string paddle = fs::absolute(dir.path / "paddle.csv").lexically_normal().string();
+  EXPECT_THAT(spec.resolved_yaml, HasSubstr(paddle));
+  EXPECT_THAT(spec.resolved_yaml, HasSubstr(fs::absolute(dir.path / "flap.csv").lexically_normal().string()));
+  EXPECT_THAT(spec.resolved_yaml, Not(HasSubstr("file: paddle.csv")));
+  const CaseSpec again = parse_case(spec.resolved_yaml, "case.resolved.yaml", {}, "/nonexistent");
+  EXPECT_EQ(again.walls[0].motion.table_value, m.table_value);
+  EXPECT_EQ(again.resolved_yaml, spec.resolved_yaml);
+}
+
+TEST(CaseFileErrors, WallMotionTables) {
+  const TempDir dir("mpsfsi_test_case_file_wall_table_errors");
+  std::ofstream(dir.path / "paddle.csv") << "0, 0\n0.5, 0.01\n";
+  std::ofstream(dir.path / "jump.csv") << "0, 0\n1e-6, 0.1\n";
+  std::ofstream(dir.path / "flap.csv") << "0, 0\n1, 95\n";
+  const std::string wall = std::string(minimal_case) +
+                           "walls:\n  - {name: paddle, type: block, rectangle: {min: [0.5, 0], max: [0.52, 0.2]}, motion: MOTION}\n";
+  const auto error = [&](const std::string& motion) { return load_error_of(dir.path, replaced(wall, "MOTION", motion)); };
+  EXPECT_THAT(error("{translation: {type: table, file: missing.csv, direction: [1, 0]}}"),
+              HasSubstr("walls[0].motion.translation.file = missing.csv: no such file"));
+  EXPECT_THAT(error("{translation: {type: table, file: paddle.csv}}"), HasSubstr("missing key 'direction'"));
+  EXPECT_THAT(error("{translation: {type: table, file: paddle.csv, direction: [0, 0]}}"),
+              HasSubstr("direction = [0, 0]: expected a non-zero direction"));
+  EXPECT_THAT(error("{translation: {type: table, file: jump.csv, direction: [1, 0]}}"),
+              HasSubstr("file = jump.csv: expected a table whose displacement changes at most 10000 m/s (it changes at 1e+05 m/s)"));
+  EXPECT_THAT(error("{translation: {type: table, file: paddle.csv, direction: [1, 0], half_window: 0}}"),
+              HasSubstr("half_window = 0: expected a positive time [s]"));
+  EXPECT_THAT(error("{translation: {type: table, file: paddle.csv, direction: [1, 0], period: 1}}"), HasSubstr("unknown key 'period'"));
+  EXPECT_THAT(error("{rotation: {type: table, file: flap.csv, pivot: [0.5, 0]}}"),
+              HasSubstr("rotation.file = flap.csv: " + (dir.path / "flap.csv").string() + ":2"));
+  EXPECT_THAT(error("{rotation: {type: table, file: flap.csv, pivot: [0.5, 0]}}"), HasSubstr("an angle in (-90, 90) degrees"));
+  EXPECT_THAT(error("{rotation: {type: table, file: paddle.csv}}"), HasSubstr("missing key 'pivot'"));
 }
