@@ -97,10 +97,14 @@ Real WallMotion::angular_velocity(const Real t) const {
 
 Mat WallMotion::matrix(const Real t) const {
   if (s_.rotation == WallMotionSpec::Rotation::none) return Mat::Identity();
+  return rotation(t).matrix();
+}
+
+Rotation WallMotion::rotation(const Real t) const {
 #if MPSFSI_DIM == 2
-  return Rotation(angle(t)).matrix();
+  return Rotation(angle(t));
 #else
-  return Rotation::about_axis(s_.axis, angle(t)).matrix();
+  return Rotation::about_axis(s_.axis, angle(t));
 #endif
 }
 

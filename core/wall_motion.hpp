@@ -16,6 +16,7 @@
 // (io/case_file.cpp fills WallMotionSpec).
 #pragma once
 
+#include "core/rotation.hpp"
 #include "core/tank_motion.hpp"
 #include "core/types.hpp"
 
@@ -78,8 +79,9 @@ class WallMotion {
   /// theta(t) [rad] and theta'(t) [rad/s].
   Real angle(Real t) const;
   Real angular_velocity(Real t) const;
-  /// R(theta(t)).
+  /// R(theta(t)), as a matrix and as a rotation.
   Mat matrix(Real t) const;
+  Rotation rotation(Real t) const;
   /// The motion at t.
   WallMotionState at(Real t) const;
   /// Where the wall point x0 (at rest) is at t, and its velocity there (at(t) for one point).

@@ -58,6 +58,7 @@ struct BodySpec {
   /// their surface are left out, so that water can surround an obstacle.
   std::vector<std::string> subtract;
   std::optional<Rect> clamp;        ///< solid only: particles inside are clamped
+  std::string clamp_wall;           ///< solid only: the wall with a motion of its own the clamp reaches into (it moves with it)
   Vec velocity = Vec::Zero();       ///< initial velocity [m/s]
   Angular angular_velocity = angular_zero();       ///< initial angular velocity about the body's centroid [rad/s] (a vector in 3D)
 };

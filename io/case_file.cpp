@@ -1127,6 +1127,25 @@ bool overlap_beyond(const Rect& a, const Rect& b, const Real tolerance) {
 }
 
 /// Every rectangle is inside the domain and at least one particle (dp/2) thick; bodies do not overlap
+/// A solid body's clamp that reaches into a wall with a motion of its own (the wall's bounds and its 3 layers)
+/// moves with that wall (BodySpec::clamp_wall): a plate clamped into a paddle. A clamp in two such walls is refused.
+void assign_clamp_walls(const Source& src, CaseSpec& spec, const GeometryFields& g) {
+  for (std::size_t i = 0; i < spec.bodies.size(); ++i) {
+    BodySpec& b = spec.bodies[i];
+    if (!b.clamp || b.kind != BodyKind::solid) continue;
+    for (const WallSpec& w : spec.walls) {
+      if (!w.motion.moving()) continue;
+      const Vec layers = Vec::Constant(3 * spec.dp);
+      if (!overlaps(*b.clamp, Rect{w.rect.lo - layers, w.rect.hi + layers})) continue;
+      if (!b.clamp_wall.empty())
+        src.fail(g.body_clamp[i], fmt::format("{} = {} reaches into two walls that move, '{}' and '{}'; expected a clamp "
+                                              "in one moving wall at most",
+                                              g.body_clamp[i].path, show_rect(*b.clamp), b.clamp_wall, w.name));
+      b.clamp_wall = w.name;
+    }
+  }
+}
+
 /// each other or a block and lie in a box when there is one (a clamped end may reach into a wall);
 /// clamps touch their body.
 void check_geometry(const Source& src, const CaseSpec& spec, const GeometryFields& g, const Field& dp_field) {
@@ -1692,6 +1711,7 @@ CaseSpec read_case(const Source& src, const YAML::Node& root, const fs::path& ba
                              "or time.cfl, a Courant number C with 0 < C <= 1 (needed with fluid bodies)");
   check_body_materials(src, spec, geometry);
   check_geometry(src, spec, geometry, top.at("dp"));
+  assign_clamp_walls(src, spec, geometry);
 
   read_tank_motion(top.optional_map("tank_motion", "a map {type: none | sine_roll | table, ...}"), base_dir, spec);
   read_coupling(top.optional_map("coupling", "a map {scheme, implicit, subcycles, solid_damping, load_relaxation}"), spec.coupling);

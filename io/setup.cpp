@@ -29,6 +29,9 @@ SolidSetup solid_setup(const CaseSpec& spec) {
   s.parameters = spec.solid;
   s.tank_motion = spec.tank_motion;
   for (const auto& b : spec.bodies) s.spins.push_back({b.name, b.angular_velocity});
+  for (const auto& b : spec.bodies)
+    for (const auto& w : spec.walls)
+      if (!b.clamp_wall.empty() && w.name == b.clamp_wall) s.clamp_motions.emplace_back(b.name, w.motion);
   s.loads = spec.solid_loads;
   s.sources = spec.sources;
   return s;

@@ -6,10 +6,12 @@
 #include "core/enum_names.hpp"
 #include "core/geometry.hpp"
 #include "core/tank_motion.hpp"
+#include "core/wall_motion.hpp"
 #include "core/types.hpp"
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mpsfsi {
@@ -135,6 +137,8 @@ struct SolidSetup {
   std::vector<SolidMaterial> materials; ///< indexed by ParticleSet::material of the solid particles
   SolidParameters parameters;
   TankMotionSpec tank_motion;           ///< moves the clamped particles
+  /// The bodies whose clamped particles move with a wall's own motion (a plate clamped into a paddle), by name.
+  std::vector<std::pair<std::string, WallMotionSpec>> clamp_motions;
   std::vector<BodySpin> spins;          ///< every body of the case, in order
   std::vector<SolidLoadSpec> loads;
   std::vector<SourceSpec> sources;

@@ -47,6 +47,7 @@
 #include "core/ramp.hpp"
 #include "core/rotation.hpp"
 #include "core/text.hpp"
+#include "core/wall_motion.hpp"
 #include "solid/sources.hpp"
 
 #include <Eigen/Dense>
@@ -153,6 +154,10 @@ struct SolidSolver::Impl {
   Vec gravity = Vec::Zero();
   Real gravity_ramp = 0;  ///< [s]: gravity times ramp_factor(t, gravity_ramp) (core/ramp.hpp)
   TankMotion tank;
+  /// By body index: the wall motion a body's clamped particles follow (SolidSetup::clamp_motions; none: the tank's).
+  std::vector<WallMotion> clamp_motion;
+  std::vector<WallMotionState> clamp_state;  ///< each body's clamp_motion at the end of the current step
+  std::vector<Rotation> clamp_rotation;      ///< ... its rotation there
   std::vector<MaterialConstants> mat;
   std::size_t n_broken = 0;  ///< bonds broken so far (all ranks)
 
@@ -324,6 +329,12 @@ SolidSolver::Impl::Impl(const SolidSetup& setup, ParticleSet& particles, Distrib
   gravity = setup.gravity;
   gravity_ramp = setup.gravity_ramp;
   tank = make_tank_motion(setup.tank_motion);
+  clamp_motion.assign(p.bodies.size(), WallMotion());
+  for (const auto& [name, motion] : setup.clamp_motions)
+    for (std::size_t k = 0; k < p.bodies.size(); ++k)
+      if (p.bodies[k].name == name) clamp_motion[k] = WallMotion(motion);
+  clamp_state.assign(p.bodies.size(), WallMotionState());
+  clamp_rotation.assign(p.bodies.size(), Rotation());
 
   // Lattice offsets within re, in lexicographic order: the bit slots of the broken-bond flags.
   o_range = static_cast<int>(std::ceil(solid.re));
@@ -842,11 +853,24 @@ SolidStepReport SolidSolver::Impl::advance(const Real t, const Real dt) {
   }
 
   // Symplectic Euler (eq. 39-40, 45-46); clamped particles are attached to the tank: they follow its
-  // prescribed roll about the pivot (at rest without a tank motion).
+  // prescribed roll about the pivot (at rest without a tank motion), or to the moving wall their clamp reaches into.
   Real v2_max = 0;
   const auto [tank_theta, tank_omega] = tank.at(t + dt);
+  for (std::size_t b = 0; b < clamp_motion.size(); ++b)
+    if (clamp_motion[b].moving()) {
+      clamp_state[b] = clamp_motion[b].at(t + dt);
+      clamp_rotation[b] = clamp_motion[b].rotation(t + dt);
+    }
   for (std::size_t k = 0; k < ns; ++k) {
     const auto i = static_cast<std::size_t>(local[k]);
+    if (p.clamped[i] && clamp_motion[p.body[i]].moving()) {
+      const WallMotionState& m = clamp_state[p.body[i]];
+      p.position[i] = m.place((*f_x0)[i]);
+      p.velocity[i] = m.velocity_of((*f_x0)[i]);
+      (*f_theta)[i] = clamp_rotation[p.body[i]].log();
+      (*f_omega)[i] = m.spin;
+      continue;
+    }
     if (p.clamped[i]) {
       p.position[i] = tank.place((*f_x0)[i], tank_theta);
       p.velocity[i] = tank.velocity_at(p.position[i], tank_omega);

@@ -1463,3 +1463,30 @@ TEST(CaseFileErrors, WallMotionTables) {
   EXPECT_THAT(error("{rotation: {type: table, file: flap.csv, pivot: [0.5, 0]}}"), HasSubstr("an angle in (-90, 90) degrees"));
   EXPECT_THAT(error("{rotation: {type: table, file: paddle.csv}}"), HasSubstr("missing key 'pivot'"));
 }
+
+// A solid's clamp that reaches into a wall with a motion of its own moves with that wall (the solid's setup gets the
+// motion by the body's name); a clamp in two moving walls is refused.
+TEST(CaseFile, ClampInAMovingWallMovesWithIt) {
+  const std::string text = std::string(minimal_case) +
+                           "  - {name: plate, kind: solid, material: rubber, rectangle: {min: [0.55, 0.19], max: [0.56, 0.3]}, "
+                           "clamp: {min: [0.545, 0.185], max: [0.565, 0.2]}}\n"
+                           "walls:\n  - {name: paddle, type: block, rectangle: {min: [0.5, 0], max: [0.6, 0.2]}, motion: "
+                           "{translation: {type: sine, amplitude: [0.02, 0], period: 1}}}\n"
+                           "  - {name: step, type: block, rectangle: {min: [0.7, 0], max: [0.8, 0.2]}}\n";
+  const std::string with_rubber = replaced(text, "materials:\n", "materials:\n  rubber: {type: solid, rho: 1100, E: 2.0e6, nu: 0.0}\n");
+  const CaseSpec spec = parse_case(with_rubber, file_name);
+  ASSERT_EQ(spec.bodies.size(), 2u);
+  EXPECT_EQ(spec.bodies[1].clamp_wall, "paddle");
+  const SolidSetup setup = solid_setup(spec);
+  ASSERT_EQ(setup.clamp_motions.size(), 1u);
+  EXPECT_EQ(setup.clamp_motions[0].first, "plate");
+  EXPECT_EQ(setup.clamp_motions[0].second.translation, WallMotionSpec::Translation::sine);
+  // Without the paddle's motion the clamp stays (a wall at rest holds it as the floor does).
+  EXPECT_EQ(parse_case(replaced(with_rubber, ", motion: {translation: {type: sine, amplitude: [0.02, 0], period: 1}}", ""),
+                       file_name).bodies[1].clamp_wall, "");
+  // A clamp that reaches two moving walls.
+  const std::string two = replaced(with_rubber, "max: [0.8, 0.2]}}", "max: [0.8, 0.2]}, motion: {translation: {type: velocity, velocity: [0, 0.1]}}}");
+  const std::string wide = replaced(two, "clamp: {min: [0.545, 0.185], max: [0.565, 0.2]}", "clamp: {min: [0.545, 0.185], max: [0.70, 0.2]}");
+  EXPECT_THAT(error_of(wide), HasSubstr("bodies[1].clamp = "));
+  EXPECT_THAT(error_of(wide), HasSubstr("reaches into two walls that move, 'paddle' and 'step'; expected a clamp in one moving wall at most"));
+}
