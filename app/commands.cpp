@@ -11,6 +11,7 @@
 #include "core/interrupt.hpp"
 #include "core/output_lock.hpp"
 #include "core/version.hpp"
+#include "core/wall_motion.hpp"
 #include "coupling/checkpoint.hpp"
 #include "coupling/rank0.hpp"
 #include "coupling/simulation.hpp"
@@ -24,6 +25,7 @@
 #include <filesystem>
 #include <functional>
 #include <fstream>
+#include <limits>
 #include <memory>
 
 namespace mpsfsi {
@@ -48,6 +50,67 @@ Scene build_scene_on_every_rank(const CaseSpec& spec) {
   MPI_Allreduce(MPI_IN_PLACE, &available, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
   return build_scene(spec, available == ULLONG_MAX ? std::nullopt
                                                    : std::optional<std::size_t>(static_cast<std::size_t>(available)));
+}
+
+/// One line on a wall's own motion for `check`: its parts, its timing and the largest speed of its particles over
+/// the run (the rigid velocity is affine in the point, so the corners of the particles' bounding box bound it);
+/// a table that ends before the run is said.
+std::string describe_wall_motion(const CaseSpec& spec, const WallSpec& w, const ParticleSet& p, const int body) {
+  const WallMotionSpec& m = w.motion;
+  std::vector<std::string> parts;
+  using T = WallMotionSpec::Translation;
+  using R = WallMotionSpec::Rotation;
+  const auto vec = [](const Vec& v) {
+    std::string s;
+    for (int a = 0; a < dim; ++a) s += fmt::format("{}{:.6g}", a ? ", " : "[", v[a]);
+    return s + "]";
+  };
+  Real table_end = -1;  // the last table row's time from start, when the motion has a table
+  switch (m.translation) {
+    case T::none: break;
+    case T::velocity: parts.push_back(fmt::format("translation at {} m/s", vec(m.velocity))); break;
+    case T::sine: parts.push_back(fmt::format("translation sine, amplitude {} m, period {:g} s", vec(m.amplitude), m.period)); break;
+    case T::table:
+      parts.push_back(fmt::format("translation table along {}, {} rows, tau {:g} to {:g} s", vec(m.direction),
+                                  m.table_time.size(), m.table_time.front(), m.table_time.back()));
+      table_end = m.table_time.back();
+      break;
+  }
+  switch (m.rotation) {
+    case R::none: break;
+    case R::sine:
+      parts.push_back(fmt::format("rotation sine about {}, amplitude {:.6g} deg, period {:g} s", vec(m.pivot),
+                                  m.angle_amplitude * 180 / pi, m.angle_period));
+      break;
+    case R::table:
+      parts.push_back(fmt::format("rotation table about {}, {} rows, tau {:g} to {:g} s", vec(m.pivot), m.angle_time.size(),
+                                  m.angle_time.front(), m.angle_time.back()));
+      table_end = std::max(table_end, m.angle_time.back());
+      break;
+  }
+  Vec lo = Vec::Constant(std::numeric_limits<Real>::max()), hi = -lo;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.body[i] == body) lo = lo.cwiseMin(p.position[i]), hi = hi.cwiseMax(p.position[i]);
+  const WallMotion motion(m);
+  Real speed = 0;
+  const int n_samples = 4000;
+  const Real t_end = std::min(spec.time.end, m.stop);
+  for (int k = 0; k <= n_samples && lo[0] <= hi[0]; ++k) {
+    const WallMotionState state = motion.at(m.start + (t_end - m.start) * k / n_samples);
+    for (int corner = 0; corner < (1 << dim); ++corner) {
+      Vec x;
+      for (int a = 0; a < dim; ++a) x[a] = (corner >> a & 1) ? hi[a] : lo[a];
+      speed = std::max(speed, state.velocity_of(x).norm());
+    }
+  }
+  std::string line = fmt::format("  wall {}: {}; start {:g} s, ramp {:g} s{}; largest speed about {:.3g} m/s", w.name,
+                                 fmt::join(parts, ", "), m.start, m.ramp,
+                                 std::isfinite(m.stop) ? fmt::format(", stop {:g} s", m.stop) : std::string(), speed);
+  if (table_end >= 0 && m.start + table_end < std::min(spec.time.end, m.stop))
+    line += fmt::format("; its table ends at t = {:g} s, before the run: the wall stays there after", m.start + table_end);
+  for (const auto& b : spec.bodies)
+    if (b.clamp_wall == w.name) line += fmt::format("; the clamp of '{}' moves with it", b.name);
+  return line;
 }
 
 }  // namespace
@@ -107,6 +170,9 @@ int command_check(const RunOptions& opts) {
     fmt::print("  wall {}: a {} ({}), bounds {}, {} {:.6g} m{}\n", c.name, c.shape, c.shape_source,
                show_rect(*c.shape_bounds), dim == 2 ? "area" : "volume", *c.shape_volume, dim == 2 ? "2" : "3");
   }
+  for (std::size_t k = 0; k < spec.walls.size(); ++k)
+    if (spec.walls[k].motion.moving())
+      fmt::print("{}\n", describe_wall_motion(spec, spec.walls[k], p, static_cast<int>(spec.bodies.size() + k)));
   for (const auto& w : warnings) fmt::print("{}\n", w);
   const double mib = static_cast<double>(estimate_memory_bytes(spec, scene)) / (1024.0 * 1024.0);
   fmt::print("memory estimate: {:.1f} MiB of data, about {:.0f} MiB with the program\n", mib,

@@ -104,6 +104,10 @@ mpsfsi_cli_test(huge_dt_max_first_step_limited_by_gravity 0 "dt 9.03e-03 s \\(ac
   run ${db} --overwrite --output ${run_dir}/huge_dt_max --end-time 0.01 --set time.dt_max=1e10)
 
 # `check` projects the steps of a run and warns when they cannot finish (water 1e9 times as viscous: dt 3.2e-9 s).
+# check describes each wall's own motion: its parts, timing, largest speed, and the clamps that move with it.
+mpsfsi_cli_test(check_describes_wall_motion 0
+                "wall paddle: translation sine, amplitude \\[0.03, 0\\] m, period 0.4 s; start 0 s, ramp 0.1 s; largest speed about 0.544 m/s; the clamp of 'plate' moves with it"
+                check ${CMAKE_CURRENT_SOURCE_DIR}/cli/cases/plate_on_paddle.yaml)
 mpsfsi_cli_test(check_projection_warns 0 "projection: 3.12e\\+08 steps of dt = 3.2e-09 s \\(viscous\\).*warning: .* cannot finish in any sensible time"
   check ${db} --set materials.water.nu=1e3)
 
