@@ -388,3 +388,25 @@ TEST(Probes3d, WaveGaugeReadsTheTopAlongZ) {
   EXPECT_NEAR(v[0], 0.4, 1e-12);  // the column's top
   EXPECT_DOUBLE_EQ(v[1], 0.01);
 }
+
+// A rotation table in 3D turns the wall about its axis through the pivot by the table's angle change since start,
+// and a translation table moves it along a 3D direction.
+TEST(CaseFile3d, WallMotionTablesTurnAboutTheAxis) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "mpsfsi_test_case_file3d_tables";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "turn.csv") << "0, 10\n1, 40\n";
+  std::ofstream(dir / "shift.csv") << "0, 0\n1, 0.1\n";
+  const std::string motion = "walls.step.motion={rotation: {type: table, file: " + (dir / "turn.csv").string() +
+                             ", pivot: [0.4, 0, 0], axis: [0, 0, 2]}, translation: {type: table, file: " +
+                             (dir / "shift.csv").string() + ", direction: [0, 0, 1]}}";
+  const WallMotionSpec m = parse_case(case_3d, file_name, {"tank_motion={type: none}", motion}).walls[1].motion;
+  expect_vec(m.axis, 0, 0, 1);
+  const WallMotion w(m);
+  // At tau = 0.5 s: turned by 15 degrees about e_z through the pivot, lifted by 0.05 m.
+  const Vec x = w.place(Vec(0.5, 0, 0), 0.5);
+  EXPECT_NEAR(x[0], 0.4 + 0.1 * std::cos(15 * pi / 180), 1e-15);
+  EXPECT_NEAR(x[1], 0.1 * std::sin(15 * pi / 180), 1e-15);
+  EXPECT_NEAR(x[2], 0.05, 1e-15);
+  EXPECT_NEAR(w.angular_velocity(0.5), 30 * pi / 180, 1e-12);
+  std::filesystem::remove_all(dir);
+}
