@@ -6,18 +6,15 @@ places and velocities, to round-off. The plate's free tip must move with the pad
 
 Usage: clamp_follows_wall_test.py --mpsfsi BIN --case CASE --work DIR --end T [-- run args]
 """
-import argparse
 import os
-import shutil
 import sys
 
 import numpy as np
-import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
 sys.path.insert(0, os.path.join(HERE, "..", "support"))
-from run_checks import fail, run  # noqa: E402
+from run_checks import case_run_parser, fail, run_case  # noqa: E402
 from run_output import frame_files, frame_times, read_frame  # noqa: E402
 
 FLUID, WALL, DUMMY, SOLID = 0, 1, 2, 3  # ParticleKind (core/particles.hpp)
@@ -34,17 +31,8 @@ def rigid_fit(x0, x):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--mpsfsi", required=True)
-    ap.add_argument("--case", required=True)
-    ap.add_argument("--work", required=True)
-    ap.add_argument("--end", type=float, required=True)
-    ap.add_argument("extra", nargs="*")
-    args = ap.parse_args()
-    shutil.rmtree(args.work, ignore_errors=True)
-    run([args.mpsfsi, "run", args.case, "--quiet", "--output", args.work, "--end-time", str(args.end), *args.extra])
-    with open(os.path.join(args.work, "case.resolved.yaml")) as f:
-        case = yaml.safe_load(f)
+    args = case_run_parser(__doc__).parse_args()
+    case = run_case(args, args.work)
     moving = [w for w in case["walls"] if w.get("motion")]
     if len(moving) != 1:
         fail("expected one moving wall in the case")

@@ -11,7 +11,6 @@ slope, round-off grows into differences of up to a dp by 1 s, whatever moves the
 
 Usage: motion_table_test.py --mpsfsi BIN --case CASE --work DIR --end T [--near D] [-- run args]
 """
-import argparse
 import math
 import os
 import shutil
@@ -23,7 +22,7 @@ import yaml
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
 sys.path.insert(0, os.path.join(HERE, "..", "support"))
-from run_checks import fail, run  # noqa: E402
+from run_checks import case_run_parser, fail, run, run_case  # noqa: E402
 from run_output import frame_files, read_frame  # noqa: E402
 
 FLUID = 0  # ParticleKind (core/particles.hpp)
@@ -41,20 +40,13 @@ def frames(run_dir):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--mpsfsi", required=True)
-    ap.add_argument("--case", required=True)
-    ap.add_argument("--work", required=True)
-    ap.add_argument("--end", type=float, required=True)
+    ap = case_run_parser(__doc__)
     ap.add_argument("--near", type=float, default=2.0, help="compare the water this far from the piston [m]")
-    ap.add_argument("extra", nargs="*")
     args = ap.parse_args()
     shutil.rmtree(args.work, ignore_errors=True)
     os.makedirs(args.work)
     formula_dir, table_dir = os.path.join(args.work, "formula"), os.path.join(args.work, "table")
-    run([args.mpsfsi, "run", args.case, "--quiet", "--output", formula_dir, "--end-time", str(args.end), *args.extra])
-    with open(os.path.join(formula_dir, "case.resolved.yaml")) as f:
-        case = yaml.safe_load(f)
+    case = run_case(args, formula_dir)
     pistons = [w for w in case["walls"] if w.get("motion", {}).get("wave_maker", {}).get("type") == "piston"]
     if len(pistons) != 1:
         fail("expected one piston wave maker in the case")

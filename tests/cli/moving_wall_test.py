@@ -9,19 +9,16 @@ V (T/2 + tau - T) after it, tau = min(t, stop) - start.
 
 Usage: moving_wall_test.py --mpsfsi BIN --case CASE --work DIR --end T [-- run args]
 """
-import argparse
 import math
 import os
-import shutil
 import sys
 
 import numpy as np
-import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
 sys.path.insert(0, os.path.join(HERE, "..", "support"))
-from run_checks import fail, run  # noqa: E402
+from run_checks import case_run_parser, fail, run_case  # noqa: E402
 from run_output import frame_files, frame_times, read_frame  # noqa: E402
 
 FLUID, WALL, DUMMY = 0, 1, 2  # ParticleKind (core/particles.hpp)
@@ -38,17 +35,8 @@ def displacement(t, motion):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--mpsfsi", required=True)
-    ap.add_argument("--case", required=True)
-    ap.add_argument("--work", required=True)
-    ap.add_argument("--end", type=float, required=True)
-    ap.add_argument("extra", nargs="*")
-    args = ap.parse_args()
-    shutil.rmtree(args.work, ignore_errors=True)
-    run([args.mpsfsi, "run", args.case, "--quiet", "--output", args.work, "--end-time", str(args.end), *args.extra])
-    with open(os.path.join(args.work, "case.resolved.yaml")) as f:
-        case = yaml.safe_load(f)
+    args = case_run_parser(__doc__).parse_args()
+    case = run_case(args, args.work)
     dp = float(case["dp"])
     moving = [w for w in case["walls"] if w.get("motion")]
     if len(moving) != 1 or moving[0]["type"] != "block":
