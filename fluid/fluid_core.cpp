@@ -321,23 +321,42 @@ struct WallCell {
 /// it the one it is deepest in is taken (then the lowest global id), so that the result does not depend on the
 /// order of the neighbours (on the number of ranks). A particle in a corner cell may land in a neighbouring cell:
 /// up to `passes` cells are handled in turn.
+///
+/// A face that is not on the lattice (a slope, a curve) leaves the cells short of it: between the cells of the
+/// lattice points inside the surface and the surface itself lie gaps that are no cell's. A particle in no cell
+/// goes back to the surface plane of a wall or dummy particle j within 2 dp if it lies behind that plane by at
+/// most dp and over j's patch of the surface (within 1.5 dp of x_j + s_j along the plane, 1.5 dp sqrt(2) in 3D),
+/// unless a plane it is in front of closes the wall there: a particle k within 2 dp whose surface point and j's
+/// lie each behind or on the other's plane (a convex edge or corner, where the wall is the intersection of the two
+/// sides, not their union). Of such j the one whose surface point is nearest is taken (then the lowest global id).
+/// On the lattice every point behind a face and over a patch is in a cell, so walls whose faces lie on the
+/// lattice are kept by the cells alone.
 std::size_t FluidCore::keep_out_of_walls() {
   if (!p.has_vector_field(wall_surface_field)) return 0;
   constexpr int passes = 3;
   const auto& to_surface = p.vector_field(wall_surface_field);
   const bool moving = walls_move();
   const Real half = 0.5 * dp, reach2 = dim * half * half;
+  const Real face_reach2 = 4 * dp * dp, patch2 = 2.25 * (dim - 1) * dp * dp, on_plane = 1e-9 * dp;
   const std::size_t none = p.size();
+  std::vector<std::size_t> near_walls;  // the wall and dummy particles within 2 dp of the particle
+  std::vector<std::pair<Vec, Vec>> surface_points;  // their surface points and normals
+  const auto surface_offset = [&](const std::size_t j) {
+    assert(!to_surface[j].isZero() && "every wall and dummy particle has its offset to the surface");
+    return moving ? Vec(wall_rotation(j) * to_surface[j]) : to_surface[j];
+  };
   const auto deepest_cell = [&](const std::size_t i) {
     WallCell cell{none};
+    near_walls.clear();
     for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
       const auto j = static_cast<std::size_t>(near.index[k]);
       if (p.kind[j] != ParticleKind::wall && p.kind[j] != ParticleKind::dummy) continue;
       const Vec d = p.position[i] - p.position[j];
-      if (d.squaredNorm() >= reach2) continue;
+      const Real d2 = d.squaredNorm();
+      if (d2 < face_reach2) near_walls.push_back(j);
+      if (d2 >= reach2) continue;
       if ((moving ? Vec(wall_rotation(j).transpose() * d) : d).cwiseAbs().maxCoeff() > half) continue;
-      assert(!to_surface[j].isZero() && "every wall and dummy particle has its offset to the surface");
-      const Vec s = moving ? Vec(wall_rotation(j) * to_surface[j]) : to_surface[j];
+      const Vec s = surface_offset(j);
       const Vec n = s.normalized();
       const Real depth = (s - d).dot(n);
       if (depth <= 0) continue;
@@ -345,7 +364,37 @@ std::size_t FluidCore::keep_out_of_walls() {
           (depth == cell.depth && p.global_id[j] < p.global_id[cell.particle]))
         cell = {j, depth, n};
     }
-    return cell;
+    if (cell.particle != none || near_walls.empty()) return cell;
+    // In no cell: the gaps between the cells and a face off the lattice.
+    surface_points.clear();
+    for (const std::size_t j : near_walls) {
+      const Vec s = surface_offset(j);
+      surface_points.push_back({p.position[j] + s, s.normalized()});
+    }
+    const auto behind = [&](const Vec& x, const std::size_t q) {  // x's depth behind the plane of near_walls[q]
+      return (surface_points[q].first - x).dot(surface_points[q].second);
+    };
+    WallCell gap{none};
+    Real gap_distance2 = 0;
+    for (std::size_t q = 0; q < near_walls.size(); ++q) {
+      const Real depth = behind(p.position[i], q);
+      if (depth <= 0 || depth > dp) continue;
+      const Vec e = surface_points[q].first - p.position[i];
+      if ((e - depth * surface_points[q].second).squaredNorm() > patch2) continue;
+      const std::size_t j = near_walls[q];
+      const Real distance2 = e.squaredNorm();
+      if (gap.particle != none && (distance2 > gap_distance2 ||
+                                   (distance2 == gap_distance2 && p.global_id[j] >= p.global_id[gap.particle])))
+        continue;
+      bool convex_edge = false;  // a plane in front of i that closes the wall with this one
+      for (std::size_t k = 0; k < near_walls.size() && !convex_edge; ++k)
+        convex_edge = behind(p.position[i], k) <= 0 && behind(surface_points[k].first, q) >= -on_plane &&
+                      behind(surface_points[q].first, k) >= -on_plane;
+      if (convex_edge) continue;
+      gap = {j, depth, surface_points[q].second};
+      gap_distance2 = distance2;
+    }
+    return gap;
   };
   std::size_t n_put_back = 0;
   for (std::size_t i = 0; i < p.n_owned(); ++i) {

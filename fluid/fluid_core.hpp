@@ -74,8 +74,9 @@ struct FluidCore {
   PressureSolveResult solve_pressure(const SurfaceValue& surface_value);
   /// Refreshes these fields at the ghosts from their owners.
   void refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report);
-  /// Walls hold water: a fluid particle that ends the step inside the lattice cell of a wall or dummy particle
-  /// goes back onto that wall's wetted surface (the particle's wall_surface_field offset), and its velocity
+  /// Walls hold water: a fluid particle that ends the step inside the lattice cell of a wall or dummy particle,
+  /// or in a gap between those cells and a face off the lattice, goes back onto that wall's wetted surface (the
+  /// particle's wall_surface_field offset), and its velocity
   /// towards the wall, relative to the wall, is reflected with the collision model's restitution. Returns
   /// the particles put back. Off when the particles have no wall_surface_field (docs/architecture.md).
   std::size_t keep_out_of_walls();

@@ -16,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace mpsfsi {
@@ -187,6 +188,48 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   scene.counts.push_back(count);
 }
 
+/// The closed lattice cells (side dp) of the wall and dummy particles, sorted by cell, to ask which other body's
+/// cell covers a point.
+class WallCells {
+ public:
+  WallCells(const Real dp, const ParticleSet& p) : dp_(dp), p_(p) {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (is_wall(i)) cells_.emplace_back(cell_of(p.position[i]), i);
+    std::sort(cells_.begin(), cells_.end(), [](const auto& a, const auto& b) { return less(a.first, b.first); });
+  }
+
+  bool is_wall(const std::size_t i) const {
+    return p_.kind[i] == ParticleKind::wall || p_.kind[i] == ParticleKind::dummy;
+  }
+
+  /// Whether q lies in the closed cell of a wall or dummy particle of a body other than `body`.
+  bool covered(const Vec& q, const int body) const {
+    const Real reach = 0.5 * dp_ * (1 + 1e-9);
+    const IVec c = cell_of(q);
+    int n_around = 1;
+    for (int a = 0; a < dim; ++a) n_around *= 3;
+    for (int m = 0; m < n_around; ++m) {  // the 3^dim cells around q's
+      IVec k = c;
+      for (int a = 0, r = m; a < dim; ++a, r /= 3) k[a] += r % 3 - 1;
+      const auto range = std::equal_range(cells_.begin(), cells_.end(), std::make_pair(k, std::size_t{0}),
+                                          [](const auto& x, const auto& y) { return less(x.first, y.first); });
+      for (auto it = range.first; it != range.second; ++it)
+        if (p_.body[it->second] != body && (q - p_.position[it->second]).cwiseAbs().maxCoeff() <= reach) return true;
+    }
+    return false;
+  }
+
+ private:
+  static bool less(const IVec& a, const IVec& b) {
+    return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
+  }
+  IVec cell_of(const Vec& x) const { return IVec((x / dp_).array().floor().cast<int>()); }
+
+  Real dp_;
+  const ParticleSet& p_;
+  std::vector<std::pair<IVec, std::size_t>> cells_;
+};
+
 /// A wall particle on an edge or corner of its body (its offset to the surface has two or more components: the
 /// faces at the same distance) whose nearest surface point, that edge or corner, lies on another wall body (a block
 /// standing on the floor, a piston sliding on it) points at its faces that are not covered instead: a fluid particle
@@ -194,45 +237,83 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
 /// along which it could slide under the block. A point is covered when it is in the closed cell (side dp) of a
 /// wall or dummy particle of another body. Offsets of other particles, and corners whose faces are all covered
 /// or none, are left as they are.
-void uncover_wall_corners(const Real dp, ParticleSet& p) {
-  if (!p.has_vector_field(wall_surface_field)) return;
+void uncover_wall_corners(const WallCells& cells, ParticleSet& p) {
   auto& to_surface = p.vector_field(wall_surface_field);
-  const auto is_wall = [&](const std::size_t i) { return p.kind[i] == ParticleKind::wall || p.kind[i] == ParticleKind::dummy; };
-  const auto cell_of = [&](const Vec& x) { return IVec((x / dp).array().floor().cast<int>()); };
-  const auto less = [](const IVec& a, const IVec& b) {
-    return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
-  };
-  std::vector<std::pair<IVec, std::size_t>> cells;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (is_wall(i)) cells.emplace_back(cell_of(p.position[i]), i);
-  std::sort(cells.begin(), cells.end(), [&](const auto& a, const auto& b) { return less(a.first, b.first); });
-  const Real reach = 0.5 * dp * (1 + 1e-9);
-  const auto covered = [&](const Vec& q, const std::size_t body) {
-    const IVec c = cell_of(q);
-    int n_around = 1;
-    for (int a = 0; a < dim; ++a) n_around *= 3;
-    for (int m = 0; m < n_around; ++m) {  // the 3^dim cells around q's
-      IVec k = c;
-      for (int a = 0, r = m; a < dim; ++a, r /= 3) k[a] += r % 3 - 1;
-      const auto range = std::equal_range(cells.begin(), cells.end(), std::make_pair(k, std::size_t{0}),
-                                          [&](const auto& x, const auto& y) { return less(x.first, y.first); });
-      for (auto it = range.first; it != range.second; ++it)
-        if (p.body[it->second] != body && (q - p.position[it->second]).cwiseAbs().maxCoeff() <= reach) return true;
-    }
-    return false;
-  };
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Vec s = to_surface[i];
-    if (!is_wall(i) || (s.array() != 0).count() < 2 || !covered(p.position[i] + s, p.body[i])) continue;
+    if (!cells.is_wall(i) || (s.array() != 0).count() < 2 || !cells.covered(p.position[i] + s, p.body[i])) continue;
     Vec open = Vec::Zero();
     for (int a = 0; a < dim; ++a) {
       if (s[a] == 0) continue;
       Vec face = Vec::Zero();
       face[a] = s[a];
-      if (!covered(p.position[i] + face, p.body[i])) open[a] = s[a];
+      if (!cells.covered(p.position[i] + face, p.body[i])) open[a] = s[a];
     }
     if (!open.isZero()) to_surface[i] = open;
   }
+}
+
+/// A wall or dummy particle of a body given by its surface (`shaped`: polygon, STL or OBJ surface, sphere, cylinder)
+/// whose nearest surface point lies on another wall body (the foot of a beach on the floor, the end of a wedge
+/// against the tank's side) points instead at the plane of the nearest surface point of its body that is not
+/// covered (of the body's particles within 6 dp): the foot of the perpendicular onto that point's plane. So the
+/// put-back of fluid near where the two bodies meet goes to the wetted face, not to the covered one, and the planes
+/// of the particles there close the gaps between their cells and the wetted face (docs/architecture.md, "Walls
+/// hold water"). Along a shallow slope on the floor the covered foot is the nearest face of the particles up to
+/// 1.5 dp below the slope, over a stretch of dp / slope. Particles with no uncovered surface point within reach
+/// (deep in a body lying on another) are left as they are.
+void uncover_shaped_walls(const WallCells& cells, const std::vector<char>& shaped, const Real dp, ParticleSet& p) {
+  auto& to_surface = p.vector_field(wall_surface_field);
+  const auto is_shaped = [&](const std::size_t i) {
+    return cells.is_wall(i) && static_cast<std::size_t>(p.body[i]) < shaped.size() && shaped[static_cast<std::size_t>(p.body[i])];
+  };
+  std::vector<char> open(p.size(), 0);  // the particle's surface point is not covered
+  std::vector<std::size_t> hidden;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!is_shaped(i)) continue;
+    open[i] = !cells.covered(p.position[i] + to_surface[i], p.body[i]);
+    if (!open[i]) hidden.push_back(i);
+  }
+  // The open particles by cells of side `reach`: a hidden particle's candidates are in the 3^dim cells around it.
+  const Real reach = 6 * dp, reach2 = reach * reach;
+  const auto coarse = [&](const Vec& x) { return IVec((x / reach).array().floor().cast<int>()); };
+  const auto less = [](const IVec& a, const IVec& b) {
+    return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
+  };
+  std::vector<std::pair<IVec, std::size_t>> open_cells;
+  for (std::size_t k = 0; k < p.size(); ++k)
+    if (open[k]) open_cells.emplace_back(coarse(p.position[k]), k);
+  std::sort(open_cells.begin(), open_cells.end(), [&](const auto& a, const auto& b) { return less(a.first, b.first); });
+  int n_around = 1;
+  for (int a = 0; a < dim; ++a) n_around *= 3;
+  std::vector<Vec> moved(hidden.size(), Vec::Zero());
+  for (std::size_t h = 0; h < hidden.size(); ++h) {
+    const std::size_t i = hidden[h];
+    std::size_t best = p.size();
+    Real best2 = std::numeric_limits<Real>::max();
+    const IVec c = coarse(p.position[i]);
+    for (int m = 0; m < n_around; ++m) {
+      IVec cell = c;
+      for (int a = 0, r = m; a < dim; ++a, r /= 3) cell[a] += r % 3 - 1;
+      const auto range = std::equal_range(open_cells.begin(), open_cells.end(), std::make_pair(cell, std::size_t{0}),
+                                          [&](const auto& x, const auto& y) { return less(x.first, y.first); });
+      for (auto it = range.first; it != range.second; ++it) {
+        const std::size_t k = it->second;
+        if (p.body[k] != p.body[i] || (p.position[k] - p.position[i]).squaredNorm() >= reach2) continue;
+        const Real d2 = (p.position[k] + to_surface[k] - p.position[i]).squaredNorm();
+        if (d2 < best2 || (d2 == best2 && best < p.size() && p.global_id[k] < p.global_id[best])) {
+          best = k;
+          best2 = d2;
+        }
+      }
+    }
+    if (best == p.size()) continue;
+    const Vec n = to_surface[best].normalized();
+    const Real depth = (p.position[best] + to_surface[best] - p.position[i]).dot(n);
+    if (depth > 0) moved[h] = depth * n;
+  }
+  for (std::size_t h = 0; h < hidden.size(); ++h)
+    if (!moved[h].isZero()) to_surface[hidden[h]] = moved[h];
 }
 
 /// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart). The particles
@@ -286,7 +367,16 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
     if (scene.particles.clamped[i]) clamped.push_back(static_cast<LocalIndex>(i));
   for (const auto& w : spec.walls) add_wall(spec, w, clamped, scene);
   check_overlap(spec, scene.particles);
-  uncover_wall_corners(spec.dp, scene.particles);
+  if (scene.particles.has_vector_field(wall_surface_field)) {
+    const WallCells cells(spec.dp, scene.particles);
+    uncover_wall_corners(cells, scene.particles);
+    std::vector<char> shaped(scene.particles.bodies.size(), 0);
+    for (std::size_t b = 0; b < scene.particles.bodies.size(); ++b)
+      for (const auto& w : spec.walls)
+        if (w.name == scene.particles.bodies[b].name && scene.particles.bodies[b].kind == ParticleKind::wall)
+          shaped[b] = w.surface != nullptr || w.round.has_value();
+    uncover_shaped_walls(cells, shaped, spec.dp, scene.particles);
+  }
   return scene;
 }
 

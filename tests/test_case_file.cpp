@@ -1240,6 +1240,31 @@ TEST(Scene, CornersOnAnotherWallPointAtTheirOpenFaces) {
   EXPECT_LT((s[at(0.005, -0.005)] - Vec(0, h)).norm(), 1e-12);  // the tank's floor
 }
 
+// A wall given by its surface that rests on another (a 1:10 beach on the tank's floor, its end against the tank's
+// right wall): the particles whose nearest surface point lies on a covered face (the foot on the floor, the end at
+// the wall) point at the foot of the perpendicular onto the wetted slope's plane instead; the others keep their
+// offsets to the slope. So every particle of the beach points at the slope: x + s on its line, s along its normal.
+TEST(Scene, ShapedWallOnAnotherPointsAtItsWettedFace) {
+  const std::string text = std::string(minimal_case) +
+                           "walls:\n  - {name: tank, type: box, rectangle: {min: [0, 0], max: [1, 1]}}\n"
+                           "  - {name: beach, type: polygon, polygon: {points: [[0.4, 0], [1.0, 0.06], [1.0, 0]]}}\n";
+  const Scene scene = build_scene(parse_case(text, file_name));
+  const ParticleSet& p = scene.particles;
+  const auto& s = p.vector_field(wall_surface_field);
+  const Vec normal = Vec(-0.06, 0.6).normalized();  // the slope's, towards the water
+  const Vec toe(0.4, 0);
+  std::size_t n_near = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.bodies[static_cast<std::size_t>(p.body[i])].name != "beach") continue;
+    const Real depth = (toe - p.position[i]).dot(normal);  // below the slope's line
+    if (depth > 3 * 0.01) continue;  // deeper than the wall layer and two dummy layers below the slope
+    ++n_near;
+    EXPECT_NEAR((p.position[i] + s[i] - toe).dot(normal), 0.0, 1e-12) << p.position[i].transpose();
+    EXPECT_NEAR(s[i].dot(normal), depth, 1e-12) << p.position[i].transpose();
+  }
+  EXPECT_GT(n_near, 100u);
+}
+
 // A body may be a disc (`sphere`) or a cylinder's section instead of a rectangle, a wall a solid disc or cylinder;
 // the scene fills them on the lattice (core/geometry.hpp), `rect` holds their bounds, and count_particles
 // counts them exactly.
