@@ -12,6 +12,10 @@ Usage
   mpsfsi run cases/hydrostatic.yaml --end-time 2 --output out/hs
   scripts/hydrostatic_check.py out/hs                    # the last frame
   scripts/hydrostatic_check.py out/hs --frames 0,20,-1   # frame numbers, negative from the end
+  scripts/hydrostatic_check.py out/hs --map 8             # and where the water moves: 8 x 8 blocks of the body
+
+--map N: for each frame, the body's rectangle cut into N x N blocks (2D; top row first), each block's mean fluid
+velocity (x, y) and the rms of the velocities about it, in mm/s: where motion in still water starts and spreads.
 """
 import argparse
 import os
@@ -29,6 +33,7 @@ def main():
     ap.add_argument("run", help="output folder of a run (holding case.resolved.yaml and particles_*.vtu)")
     ap.add_argument("--frames", default="-1", help="comma-separated frame numbers (default: the last)")
     ap.add_argument("--body", default=None, help="the fluid body (default: the first fluid body of the case)")
+    ap.add_argument("--map", type=int, default=0, metavar="N", help="print N x N blocks of the velocity (see above)")
     args = ap.parse_args()
     prog = "hydrostatic_check.py"
     all_files = frame_files(args.run, prog)
@@ -65,7 +70,31 @@ def main():
         top = (np.mean(tops) + dp / 2 - y0) / h
         print(f"| {os.path.basename(path)} | {n} | {top:.4f} | {v.max():.3f} | {np.percentile(v, 99):.3f} | "
               f"{np.median(v):.3f} | {err:.2f} / {err_median:.2f} |")
+    if args.map > 0:
+        lo = np.array(body["rectangle"]["min"][:2], float)
+        hi = np.array(body["rectangle"]["max"][:2], float)
+        for path in files:
+            x, f = read_frame(path)
+            fluid = f["kind"] == FLUID
+            print_map(os.path.basename(path), x[fluid, :2], f["velocity"][fluid, :2], lo, hi, args.map)
     return 0
+
+
+def print_map(name, x, v, lo, hi, n):
+    """The N x N blocks of the rectangle lo-hi (top row first): mean velocity (x, y) | rms about it, mm/s."""
+    block = np.floor((x - lo) / (hi - lo) * n).astype(int).clip(0, n - 1)
+    print(f"{name}: mean velocity x, y | rms about it [mm/s] in {n} x {n} blocks, top row first")
+    for row in range(n - 1, -1, -1):
+        cells = []
+        for col in range(n):
+            inside = (block[:, 0] == col) & (block[:, 1] == row)
+            if not np.any(inside):
+                cells.append(" " * 17)
+                continue
+            mean = v[inside].mean(axis=0)
+            rms = np.sqrt(((v[inside] - mean) ** 2).sum(axis=1).mean())
+            cells.append(f"{mean[0] * 1e3:+5.1f},{mean[1] * 1e3:+5.1f}|{rms * 1e3:4.1f}")
+        print("  ".join(cells))
 
 
 if __name__ == "__main__":
