@@ -340,23 +340,24 @@ std::size_t FluidCore::keep_out_of_walls() {
   const Real face_reach2 = 4 * dp * dp, patch2 = 2.25 * (dim - 1) * dp * dp, on_plane = 1e-9 * dp;
   const std::size_t none = p.size();
   std::vector<std::size_t> near_walls;  // the wall and dummy particles within 2 dp of the particle
+  std::vector<Vec> offsets;  // their offsets to the surface, as the walls stand now
   std::vector<std::pair<Vec, Vec>> surface_points;  // their surface points and normals
-  const auto surface_offset = [&](const std::size_t j) {
-    assert(!to_surface[j].isZero() && "every wall and dummy particle has its offset to the surface");
-    return moving ? Vec(wall_rotation(j) * to_surface[j]) : to_surface[j];
-  };
   const auto deepest_cell = [&](const std::size_t i) {
     WallCell cell{none};
     near_walls.clear();
+    offsets.clear();
     for (std::size_t k = near.begin(i); k < near.end(i); ++k) {
       const auto j = static_cast<std::size_t>(near.index[k]);
       if (p.kind[j] != ParticleKind::wall && p.kind[j] != ParticleKind::dummy) continue;
       const Vec d = p.position[i] - p.position[j];
       const Real d2 = d.squaredNorm();
-      if (d2 < face_reach2) near_walls.push_back(j);
+      if (d2 >= face_reach2) continue;
+      assert(!to_surface[j].isZero() && "every wall and dummy particle has its offset to the surface");
+      near_walls.push_back(j);
+      offsets.push_back(moving ? Vec(wall_rotation(j) * to_surface[j]) : to_surface[j]);
       if (d2 >= reach2) continue;
       if ((moving ? Vec(wall_rotation(j).transpose() * d) : d).cwiseAbs().maxCoeff() > half) continue;
-      const Vec s = surface_offset(j);
+      const Vec& s = offsets.back();
       const Vec n = s.normalized();
       const Real depth = (s - d).dot(n);
       if (depth <= 0) continue;
@@ -367,10 +368,8 @@ std::size_t FluidCore::keep_out_of_walls() {
     if (cell.particle != none || near_walls.empty()) return cell;
     // In no cell: the gaps between the cells and a face off the lattice.
     surface_points.clear();
-    for (const std::size_t j : near_walls) {
-      const Vec s = surface_offset(j);
-      surface_points.push_back({p.position[j] + s, s.normalized()});
-    }
+    for (std::size_t q = 0; q < near_walls.size(); ++q)
+      surface_points.push_back({p.position[near_walls[q]] + offsets[q], offsets[q].normalized()});
     const auto behind = [&](const Vec& x, const std::size_t q) {  // x's depth behind the plane of near_walls[q]
       return (surface_points[q].first - x).dot(surface_points[q].second);
     };

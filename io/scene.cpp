@@ -188,33 +188,30 @@ void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIn
   scene.counts.push_back(count);
 }
 
-/// The closed lattice cells (side dp) of the wall and dummy particles, sorted by cell, to ask which other body's
-/// cell covers a point.
-class WallCells {
+/// Points sorted by the cells of side `side` that hold them, with the cells at hand as a sorted list (memory of
+/// the points only, not of a grid over their bounding box): which points lie in the 3^dim cells around a point.
+class SparseCells {
  public:
-  WallCells(const Real dp, const ParticleSet& p) : dp_(dp), p_(p) {
-    for (std::size_t i = 0; i < p.size(); ++i)
-      if (is_wall(i)) cells_.emplace_back(cell_of(p.position[i]), i);
+  SparseCells(const Real side, const std::vector<Vec>& x, const std::vector<std::size_t>& index) : side_(side) {
+    cells_.reserve(index.size());
+    for (const std::size_t i : index) cells_.emplace_back(cell_of(x[i]), i);
     std::sort(cells_.begin(), cells_.end(), [](const auto& a, const auto& b) { return less(a.first, b.first); });
   }
 
-  bool is_wall(const std::size_t i) const {
-    return p_.kind[i] == ParticleKind::wall || p_.kind[i] == ParticleKind::dummy;
-  }
-
-  /// Whether q lies in the closed cell of a wall or dummy particle of a body other than `body`.
-  bool covered(const Vec& q, const int body) const {
-    const Real reach = 0.5 * dp_ * (1 + 1e-9);
+  /// Call visit(i) for every point i in the 3^dim cells around q's cell (all points within `side` of q, and some
+  /// farther), until visit returns true; return whether it did.
+  template <class Visit>
+  bool any_near(const Vec& q, Visit&& visit) const {
     const IVec c = cell_of(q);
     int n_around = 1;
     for (int a = 0; a < dim; ++a) n_around *= 3;
-    for (int m = 0; m < n_around; ++m) {  // the 3^dim cells around q's
+    for (int m = 0; m < n_around; ++m) {
       IVec k = c;
       for (int a = 0, r = m; a < dim; ++a, r /= 3) k[a] += r % 3 - 1;
       const auto range = std::equal_range(cells_.begin(), cells_.end(), std::make_pair(k, std::size_t{0}),
                                           [](const auto& x, const auto& y) { return less(x.first, y.first); });
       for (auto it = range.first; it != range.second; ++it)
-        if (p_.body[it->second] != body && (q - p_.position[it->second]).cwiseAbs().maxCoeff() <= reach) return true;
+        if (visit(it->second)) return true;
     }
     return false;
   }
@@ -223,11 +220,41 @@ class WallCells {
   static bool less(const IVec& a, const IVec& b) {
     return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
   }
-  IVec cell_of(const Vec& x) const { return IVec((x / dp_).array().floor().cast<int>()); }
+  IVec cell_of(const Vec& x) const { return IVec((x / side_).array().floor().cast<int>()); }
 
+  Real side_;
+  std::vector<std::pair<IVec, std::size_t>> cells_;
+};
+
+bool is_wall(const ParticleSet& p, const std::size_t i) {
+  return p.kind[i] == ParticleKind::wall || p.kind[i] == ParticleKind::dummy;
+}
+
+std::vector<std::size_t> walls_of(const ParticleSet& p) {
+  std::vector<std::size_t> walls;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (is_wall(p, i)) walls.push_back(i);
+  return walls;
+}
+
+/// The closed lattice cells (side dp) of the wall and dummy particles, to ask which other body's cell covers a
+/// point.
+class WallCells {
+ public:
+  WallCells(const Real dp, const ParticleSet& p) : dp_(dp), p_(p), cells_(dp, p.position, walls_of(p)) {}
+
+  /// Whether q lies in the closed cell of a wall or dummy particle of a body other than `body`.
+  bool covered(const Vec& q, const int body) const {
+    const Real reach = 0.5 * dp_ * (1 + 1e-9);
+    return cells_.any_near(q, [&](const std::size_t j) {
+      return p_.body[j] != body && (q - p_.position[j]).cwiseAbs().maxCoeff() <= reach;
+    });
+  }
+
+ private:
   Real dp_;
   const ParticleSet& p_;
-  std::vector<std::pair<IVec, std::size_t>> cells_;
+  SparseCells cells_;
 };
 
 /// A wall particle on an edge or corner of its body (its offset to the surface has two or more components: the
@@ -241,7 +268,7 @@ void uncover_wall_corners(const WallCells& cells, ParticleSet& p) {
   auto& to_surface = p.vector_field(wall_surface_field);
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Vec s = to_surface[i];
-    if (!cells.is_wall(i) || (s.array() != 0).count() < 2 || !cells.covered(p.position[i] + s, p.body[i])) continue;
+    if (!is_wall(p, i) || (s.array() != 0).count() < 2 || !cells.covered(p.position[i] + s, p.body[i])) continue;
     Vec open = Vec::Zero();
     for (int a = 0; a < dim; ++a) {
       if (s[a] == 0) continue;
@@ -265,7 +292,7 @@ void uncover_wall_corners(const WallCells& cells, ParticleSet& p) {
 void uncover_shaped_walls(const WallCells& cells, const std::vector<char>& shaped, const Real dp, ParticleSet& p) {
   auto& to_surface = p.vector_field(wall_surface_field);
   const auto is_shaped = [&](const std::size_t i) {
-    return cells.is_wall(i) && static_cast<std::size_t>(p.body[i]) < shaped.size() && shaped[static_cast<std::size_t>(p.body[i])];
+    return is_wall(p, i) && static_cast<std::size_t>(p.body[i]) < shaped.size() && shaped[static_cast<std::size_t>(p.body[i])];
   };
   std::vector<char> open(p.size(), 0);  // the particle's surface point is not covered
   std::vector<std::size_t> hidden;
@@ -276,37 +303,24 @@ void uncover_shaped_walls(const WallCells& cells, const std::vector<char>& shape
   }
   // The open particles by cells of side `reach`: a hidden particle's candidates are in the 3^dim cells around it.
   const Real reach = 6 * dp, reach2 = reach * reach;
-  const auto coarse = [&](const Vec& x) { return IVec((x / reach).array().floor().cast<int>()); };
-  const auto less = [](const IVec& a, const IVec& b) {
-    return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
-  };
-  std::vector<std::pair<IVec, std::size_t>> open_cells;
+  std::vector<std::size_t> opened;
   for (std::size_t k = 0; k < p.size(); ++k)
-    if (open[k]) open_cells.emplace_back(coarse(p.position[k]), k);
-  std::sort(open_cells.begin(), open_cells.end(), [&](const auto& a, const auto& b) { return less(a.first, b.first); });
-  int n_around = 1;
-  for (int a = 0; a < dim; ++a) n_around *= 3;
+    if (open[k]) opened.push_back(k);
+  const SparseCells open_cells(reach, p.position, opened);
   std::vector<Vec> moved(hidden.size(), Vec::Zero());
   for (std::size_t h = 0; h < hidden.size(); ++h) {
     const std::size_t i = hidden[h];
     std::size_t best = p.size();
     Real best2 = std::numeric_limits<Real>::max();
-    const IVec c = coarse(p.position[i]);
-    for (int m = 0; m < n_around; ++m) {
-      IVec cell = c;
-      for (int a = 0, r = m; a < dim; ++a, r /= 3) cell[a] += r % 3 - 1;
-      const auto range = std::equal_range(open_cells.begin(), open_cells.end(), std::make_pair(cell, std::size_t{0}),
-                                          [&](const auto& x, const auto& y) { return less(x.first, y.first); });
-      for (auto it = range.first; it != range.second; ++it) {
-        const std::size_t k = it->second;
-        if (p.body[k] != p.body[i] || (p.position[k] - p.position[i]).squaredNorm() >= reach2) continue;
-        const Real d2 = (p.position[k] + to_surface[k] - p.position[i]).squaredNorm();
-        if (d2 < best2 || (d2 == best2 && best < p.size() && p.global_id[k] < p.global_id[best])) {
-          best = k;
-          best2 = d2;
-        }
+    open_cells.any_near(p.position[i], [&](const std::size_t k) {
+      if (p.body[k] != p.body[i] || (p.position[k] - p.position[i]).squaredNorm() >= reach2) return false;
+      const Real d2 = (p.position[k] + to_surface[k] - p.position[i]).squaredNorm();
+      if (d2 < best2 || (d2 == best2 && best < p.size() && p.global_id[k] < p.global_id[best])) {
+        best = k;
+        best2 = d2;
       }
-    }
+      return false;
+    });
     if (best == p.size()) continue;
     const Vec n = to_surface[best].normalized();
     const Real depth = (p.position[best] + to_surface[best] - p.position[i]).dot(n);
@@ -317,35 +331,24 @@ void uncover_shaped_walls(const WallCells& cells, const std::vector<char>& shape
 }
 
 /// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart). The particles
-/// sorted by cells of side dp/2 (memory of the particles only, not of a grid over the domain's box).
+/// sorted by cells of side dp/2 (SparseCells).
 void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
   const Real h = 0.5 * spec.dp;
-  const auto cell_of = [&](const Vec& x) { return IVec((x / h).array().floor().cast<int>()); };
-  std::vector<std::pair<IVec, std::size_t>> cells(p.size());
+  std::vector<std::size_t> all(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!p.position[i].allFinite()) throw CaseError(fmt::format("{}: a particle position is not finite", spec.file));
-    cells[i] = {cell_of(p.position[i]), i};
+    all[i] = i;
   }
-  const auto less = [](const IVec& a, const IVec& b) {
-    return std::lexicographical_compare(a.data(), a.data() + dim, b.data(), b.data() + dim);
-  };
-  std::sort(cells.begin(), cells.end(), [&](const auto& a, const auto& b) { return less(a.first, b.first) || (a.first == b.first && a.second < b.second); });
-  constexpr int n_near = dim == 2 ? 9 : 27;
+  const SparseCells cells(h, p.position, all);
   for (std::size_t i = 0; i < p.size(); ++i) {
     // The first pair in index order: the lowest i, then its lowest j (then i < j).
-    const IVec c = cell_of(p.position[i]);
     std::size_t j_min = p.size();
-    for (int n = 0; n < n_near; ++n) {
-      IVec q = c;
-      for (int a = 0, k = n; a < dim; ++a, k /= 3) q[a] += k % 3 - 1;
-      auto it = std::lower_bound(cells.begin(), cells.end(), q, [&](const auto& e, const IVec& key) { return less(e.first, key); });
-      for (; it != cells.end() && it->first == q; ++it) {
-        const std::size_t j = it->second;
-        // r = 0 included (unlike in_support): two walls on the same lattice points overlap too.
-        if (p.body[i] != p.body[j] && (p.position[j] - p.position[i]).squaredNorm() < h * h * (1.0 - support_margin))
-          j_min = std::min(j_min, j);
-      }
-    }
+    cells.any_near(p.position[i], [&](const std::size_t j) {
+      // r = 0 included (unlike in_support): two walls on the same lattice points overlap too.
+      if (p.body[i] != p.body[j] && (p.position[j] - p.position[i]).squaredNorm() < h * h * (1.0 - support_margin))
+        j_min = std::min(j_min, j);
+      return false;
+    });
     if (j_min == p.size()) continue;
     const std::size_t j = j_min;
     throw CaseError(fmt::format(

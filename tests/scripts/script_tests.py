@@ -1,7 +1,8 @@
 """Driver of the ctest tests of scripts/plot_probes.py, scripts/render.py, scripts/sweep.py with
-scripts/flow_check.py and cases/dam_break_lobovsky/analyse.py (see tests/scripts/CMakeLists.txt; render-3d:
+scripts/flow_check.py, scripts/hydrostatic_check.py and cases/dam_break_lobovsky/analyse.py (see tests/scripts/CMakeLists.txt; render-3d:
 tests/dim3/CMakeLists.txt, the 3D build)."""
 import os
+import re
 import shutil
 import struct
 import subprocess
@@ -234,6 +235,69 @@ def test_lobovsky(python, script, work):
     print("OK")
 
 
+def test_hydrostatic(python, script, work):
+    """hydrostatic_check.py on a frame made by hand: water 0.1 m deep on a 10 x 10 lattice (dp 0.01 m) at the exact
+    hydrostatic pressure but one particle 10 % over it, still but the block of the top right corner (the 2 x 2 map's
+    top right block, 25 particles) moving at (1, -2) mm/s and one particle of it at (1, -2) + (3, 4) mm/s."""
+    import math
+
+    import numpy as np
+    import vtk
+    from vtk.util.numpy_support import numpy_to_vtk
+
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    rho, g, dp, h = 1000.0, 9.81, 0.01, 0.1
+    with open(os.path.join(work, "case.resolved.yaml"), "w") as f:
+        f.write(f"dp: {dp}\ngravity: [0, -{g}]\nmaterials:\n  water: {{rho: {rho}}}\n"
+                f"bodies:\n  - name: water\n    kind: fluid\n    material: water\n"
+                f"    rectangle: {{min: [0, 0], max: [{h}, {h}]}}\n")
+    c = (np.arange(10) + 0.5) * dp
+    x = np.array([[a, b, 0.0] for b in c for a in c])
+    p = rho * g * (h - x[:, 1])
+    v = np.zeros_like(x)
+    corner = (x[:, 0] > h / 2) & (x[:, 1] > h / 2)
+    v[corner, :2] = [1e-3, -2e-3]
+    odd = int(np.flatnonzero(corner)[0])
+    v[odd, :2] += [3e-3, 4e-3]
+    deep = 12  # 1.25 dp above the floor: deeper than 3 dp below the surface
+    p[deep] *= 1.1
+    grid = vtk.vtkUnstructuredGrid()
+    points = vtk.vtkPoints()
+    points.SetData(numpy_to_vtk(x, deep=True))
+    grid.SetPoints(points)
+    for name, values in (("kind", np.zeros(len(x), np.int32)), ("pressure", p), ("velocity", v)):
+        array = numpy_to_vtk(values, deep=True)
+        array.SetName(name)
+        grid.GetPointData().AddArray(array)
+    writer = vtk.vtkXMLUnstructuredGridWriter()
+    writer.SetFileName(os.path.join(work, "particles_000000.vtu"))
+    writer.SetInputData(grid)
+    if writer.Write() != 1:
+        fail("cannot write the frame")
+    rc, out = run([python, script, work, "--map", "2"])
+    if rc != 0:
+        fail(f"exit code {rc}")
+    row = [line for line in out.splitlines() if line.startswith("| particles_000000.vtu")]
+    if len(row) != 1:
+        fail("no table row for the frame")
+    cells = [cell.strip() for cell in row[0].split("|")[1:-1]]
+    fastest = math.hypot(4e-3, 2e-3) / math.sqrt(g * h) * 100
+    if cells[1] != "100" or cells[2] != "1.0000" or abs(float(cells[3]) - fastest) > 1e-3:
+        fail(f"count, top or largest speed wrong: {cells}, expected 100, 1.0000, {fastest:.3f}")
+    if cells[6] != "10.00 / 0.00":
+        fail(f"pressure error {cells[6]}, expected 10.00 / 0.00")
+    rms = math.sqrt(24 * (0.12e-3 ** 2 + 0.16e-3 ** 2) + (2.88e-3 ** 2 + 3.84e-3 ** 2)) / 5 * 1e3  # mm/s
+    lines = out.splitlines()
+    at = [k for k, line in enumerate(lines) if line.startswith("particles_000000.vtu: mean velocity")]
+    if len(at) != 1:
+        fail("no map for the frame")
+    top, bottom = ([float(v) for v in re.findall(r"[-+]?\d+\.\d", lines[at[0] + k])] for k in (1, 2))
+    if top != [0.0, 0.0, 0.0, 1.1, -1.8, round(rms, 1)] or bottom != [0.0] * 6:
+        fail(f"the map's rows {top} and {bottom}, expected one block at 1.1, -1.8 mm/s, rms {rms:.1f}, the rest still")
+    print("OK")
+
+
 if __name__ == "__main__":
     what = sys.argv[1]
     if what == "plot":
@@ -246,6 +310,8 @@ if __name__ == "__main__":
         test_render_no_display(*sys.argv[2:5])
     elif what == "lobovsky":
         test_lobovsky(*sys.argv[2:5])
+    elif what == "hydrostatic":
+        test_hydrostatic(*sys.argv[2:5])
     elif what == "sweep":
         test_sweep(*sys.argv[2:7])
     else:
