@@ -44,6 +44,7 @@ class ProjectionScheme final : public PressureScheme {
     if (n_steps != 0) return;
     reference_densities();
     core.refresh_ghosts({reference_density_field}, report);
+    start_position = p.position;  // owned and ghosts: the first step's displacements (build_gram)
   }
 
   bool keeps_surface() const override { return true; }
@@ -66,6 +67,7 @@ class ProjectionScheme final : public PressureScheme {
 
   void prepare(Real) override {
     step_alpha = initial_step() ? start_alpha : stabilisation;
+    linear_source = initial_step();
     projection_geometry();
     gram_ready = false;
   }
@@ -136,12 +138,14 @@ class ProjectionScheme final : public PressureScheme {
     n_kernel.resize(n);
     n_fluid.resize(n);
     c_of.resize(n);
+    // The first solve on the positions before the step moved them.
+    const std::vector<Vec>& x = linear_source ? start_position : p.position;
     for (std::size_t k = 0; k < n; ++k) {
       Vec s = Vec::Zero();
       Real n_k = 0, n_f = 0, c_k = 0;
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
         const auto j = static_cast<std::size_t>(near.index[q]);
-        const Vec r_jk = p.position[k] - p.position[j];
+        const Vec r_jk = x[k] - x[j];
         const Real r = r_jk.norm();
         const KernelValue kv = kernel_at(kernel, r, re_p);
         dn_pair[q] = (kv.dw / r) * r_jk;
@@ -203,6 +207,19 @@ class ProjectionScheme final : public PressureScheme {
     if (row_of[j] >= 0) return row_of[j];
     if (j < parent_of.size() && parent_of[j] >= 0) return row_of[static_cast<std::size_t>(parent_of[j])];
     return -1;
+  }
+
+  /// The first step's change of particle i's number density to first order in the displacements d since the
+  /// start (start_position): sum_j dn_i/dx_i . (d_i - d_j) over its neighbours (the fluid ones only for
+  /// `fluid_only`, a wall or solid row, whose other neighbours count at their reference).
+  Real linear_change(const std::size_t i, const bool fluid_only) const {
+    const Vec d_i = p.position[i] - start_position[i];
+    Real change = 0;
+    for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
+      const auto j = static_cast<std::size_t>(near.index[q]);
+      if (!fluid_only || roles[j] == Role::fluid) change += dn_pair[q].dot(d_i - (p.position[j] - start_position[j]));
+    }
+    return change;
   }
 
   /// The projection's operator over this rank's rows (every row particle, whatever its free-surface flag),
@@ -268,6 +285,14 @@ class ProjectionScheme final : public PressureScheme {
     row_error.resize(n_rows);
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
+      if (linear_source) {
+        // The first solve: the error at the start plus the step's displacements' change to first order, the
+        // change that the correction's G undoes.
+        row_error[r] = initial_error[i] + linear_change(i, roles[i] != Role::fluid);
+        for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e)
+          row_error[r] += linear_change(static_cast<std::size_t>(members[e]), false);
+        continue;
+      }
       // A wall or solid row: its fluid neighbours' part of the density, and the rest at its reference.
       const Real n_i = roles[i] == Role::fluid ? n_kernel[i] : n_fluid[i] + reference[i];
       row_error[r] = n_i - n0_kernel + rest_offset[i] + rest_rate[i] * dt * dt;
@@ -450,6 +475,14 @@ class ProjectionScheme final : public PressureScheme {
   /// (docs/validation.md, ## Fluid).
   void start_from_rest(const Real dt) {
     step_alpha = stabilisation;
+    linear_source = false;
+    // The offsets on the geometry of the moved positions, which the next step's rows see; the correction of
+    // this step on the geometry of its rows (the start's), kept aside meanwhile.
+    std::vector<Vec> start_pair, start_self;
+    std::swap(dn_pair, start_pair);
+    std::swap(dn_self, start_self);
+    const Real start_scale = projection_scale;
+    projection_geometry();
     build_gram(dt);  // G' of the later steps (the offsets are still 0: row_error is b)
     auto& rest_offset = p.scalar_field(rest_offset_field);
     auto& rest_rate = p.scalar_field(rest_rate_field);
@@ -465,6 +498,9 @@ class ProjectionScheme final : public PressureScheme {
       rest_offset[i] = pressure[i] * n0_kernel / (kappa * rho * c * c) - initial_error[i];
       rest_rate[i] = (g_p / s - (row_error[r] - initial_error[i])) / (dt * dt);
     }
+    std::swap(dn_pair, start_pair);
+    std::swap(dn_self, start_self);
+    projection_scale = start_scale;
   }
 
   /// The projection's correction: v_k += -(dt/rho)(d/C) sum_j (p_k + p_j - 2 b_k) dn_j/dx_k, r_k += dt dv_k, for
@@ -499,13 +535,15 @@ class ProjectionScheme final : public PressureScheme {
     }
   }
 
-  /// The projection: surface_value of every particle in the near list (owned and ghosts).
+  /// The projection: surface_value of every particle in the near list (owned and ghosts). A particle whose
+  /// neighbours balance (|dn_k/dx_k| at round-off, inside a regular arrangement) has no normal: 0.
   void surface_pressures() {
     const std::size_t n = near.n_particles();
     surface_pressure.assign(n, 0.0);
+    const Real no_normal = 1e-9 * n0_kernel / dp;
     for (std::size_t k = 0; k < n; ++k) {
       const Real norm = dn_self[k].norm();
-      if (roles[k] != Role::fluid || !(norm > 0)) continue;
+      if (roles[k] != Role::fluid || !(norm > no_normal)) continue;
       surface_pressure[k] = 0.5 * rho * dp * std::max(0.0, gravity.dot(dn_self[k]) / norm);
     }
   }
@@ -571,6 +609,10 @@ class ProjectionScheme final : public PressureScheme {
   std::vector<Real> gram_val;
   std::vector<LocalIndex> column_particle;  ///< projection: the particle of each column
   bool gram_ready = false;                  ///< G built for this step
+  /// The first solve's rows take the density change of the step's displacements to first order (build_gram):
+  /// the error that G's correction removes, so that p0 does not depend on how far dt moves the fluid.
+  bool linear_source = false;
+  std::vector<Vec> start_position;          ///< the first step: every particle's position before it moves
   std::vector<Real> assembled_surface;      ///< projection: the free-surface flags of the last assembly
 };
 

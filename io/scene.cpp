@@ -330,6 +330,42 @@ void uncover_shaped_walls(const WallCells& cells, const std::vector<char>& shape
     if (!moved[h].isZero()) to_surface[hidden[h]] = moved[h];
 }
 
+/// A wall or dummy particle whose surface point lies on a face it shares with a shaped obstacle wall (a polygon,
+/// STL or OBJ surface, sphere or cylinder that is not a container) that is thinner than dp/2 above it, too thin for
+/// particles of its own (the floor under the toe of a beach standing on it), points at the wetted face over it
+/// instead: the foot of the perpendicular onto the plane of the face where the normal through its surface point
+/// leaves the shape. So the put-back's gap rule closes the sliver between its cell and that face
+/// (docs/architecture.md, "Walls hold water").
+void point_under_slivers(const CaseSpec& spec, ParticleSet& p) {
+  auto& to_surface = p.vector_field(wall_surface_field);
+  const Real sliver = 0.5 * spec.dp, step_in = 1e-6 * spec.dp;
+  for (const auto& w : spec.walls) {
+    if ((w.surface == nullptr && !w.round.has_value()) || w.is_container()) continue;
+    const auto own = std::find_if(p.bodies.begin(), p.bodies.end(), [&](const auto& b) { return b.name == w.name; });
+    const int body = static_cast<int>(own - p.bodies.begin());
+    const SignedDistance distance = wall_distance(w);
+    const Vec lo = w.rect.lo.array() - spec.dp, hi = w.rect.hi.array() + spec.dp;
+    Vec nearest;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (!is_wall(p, i) || p.body[i] == body) continue;
+      const Vec q = p.position[i] + to_surface[i];
+      if ((q.array() < lo.array()).any() || (q.array() > hi.array()).any()) continue;
+      const Vec n = to_surface[i].normalized();  // towards the water
+      if (distance(q + step_in * n, nearest) >= 0 || distance(q + sliver * n, nearest) <= 0) continue;
+      Real inside = step_in, outside = sliver;  // where the normal through q leaves the shape
+      for (int k = 0; k < 40; ++k) {
+        const Real t = 0.5 * (inside + outside);
+        (distance(q + t * n, nearest) < 0 ? inside : outside) = t;
+      }
+      const Vec beyond = q + (outside + step_in) * n;
+      if (!(distance(beyond, nearest) > 0)) continue;
+      const Vec m = (beyond - nearest).normalized();  // the face's outward normal there
+      const Real depth = (nearest - p.position[i]).dot(m);
+      if (depth > 0) to_surface[i] = depth * m;
+    }
+  }
+}
+
 /// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart). The particles
 /// sorted by cells of side dp/2 (SparseCells).
 void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
@@ -379,6 +415,7 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
         if (w.name == scene.particles.bodies[b].name && scene.particles.bodies[b].kind == ParticleKind::wall)
           shaped[b] = w.surface != nullptr || w.round.has_value();
     uncover_shaped_walls(cells, shaped, spec.dp, scene.particles);
+    point_under_slivers(spec, scene.particles);
   }
   return scene;
 }

@@ -1263,6 +1263,18 @@ TEST(Scene, ShapedWallOnAnotherPointsAtItsWettedFace) {
     EXPECT_NEAR(s[i].dot(normal), depth, 1e-12) << p.position[i].transpose();
   }
   EXPECT_GT(n_near, 100u);
+  // The floor under the beach's toe (0.4 < x < 0.45, where the slope is less than dp/2 high and the beach has no
+  // particles) points at the slope's plane, not at its own face that the beach's foot covers.
+  std::size_t n_sliver = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.bodies[static_cast<std::size_t>(p.body[i])].name != "tank" || p.position[i][1] > 0) continue;
+    const Real x = p.position[i][0];
+    if (x < 0.4 + 1e-9 || x > 0.45 - 1e-9) continue;
+    ++n_sliver;
+    EXPECT_NEAR((p.position[i] + s[i] - toe).dot(normal), 0.0, 1e-9) << p.position[i].transpose();
+    EXPECT_NEAR(s[i].normalized().dot(normal), 1.0, 1e-9) << p.position[i].transpose();
+  }
+  EXPECT_EQ(n_sliver, 5u * 3u);  // five columns of the wall layer and its two dummy layers
 }
 
 // A body may be a disc (`sphere`) or a cylinder's section instead of a rectangle, a wall a solid disc or cylinder;
