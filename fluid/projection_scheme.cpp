@@ -210,7 +210,7 @@ class ProjectionScheme final : public PressureScheme {
   }
 
   /// The first step's change of particle i's number density to first order in the displacements d since the
-  /// start (start_position): sum_j dn_i/dx_i . (d_i - d_j) over its neighbours (the fluid ones only for
+  /// start (start_position): sum_j dw(r_ij)/dx_i . (d_i - d_j) over its neighbours (the fluid ones only for
   /// `fluid_only`, a wall or solid row, whose other neighbours count at their reference).
   Real linear_change(const std::size_t i, const bool fluid_only) const {
     const Vec d_i = p.position[i] - start_position[i];
@@ -501,6 +501,7 @@ class ProjectionScheme final : public PressureScheme {
     std::swap(dn_pair, start_pair);
     std::swap(dn_self, start_self);
     projection_scale = start_scale;
+    std::vector<Vec>().swap(start_position);
   }
 
   /// The projection's correction: v_k += -(dt/rho)(d/C) sum_j (p_k + p_j - 2 b_k) dn_j/dx_k, r_k += dt dv_k, for
