@@ -84,6 +84,8 @@ struct WallSpec {
   WallMotionSpec motion;      ///< a motion of its own (`motion`: a gate, a wave maker), relative to the domain
   /// A tank: the fluid is inside it (a box, or a surface with the fluid inside).
   bool is_container() const { return type == WallType::box || (type == WallType::surface && fluid_inside); }
+  /// Given by its surface (a polygon, STL or OBJ surface, sphere or cylinder) rather than by a rectangle.
+  bool is_shaped() const { return surface != nullptr || round.has_value(); }
 };
 
 enum class ProbeType { pressure, surge_front, column_height, wave_gauge, displacement };

@@ -336,13 +336,13 @@ void uncover_shaped_walls(const WallCells& cells, const std::vector<char>& shape
 /// instead: the foot of the perpendicular onto the plane of the face where the normal through its surface point
 /// leaves the shape. So the put-back's gap rule closes the sliver between its cell and that face
 /// (docs/architecture.md, "Walls hold water").
-void point_under_slivers(const CaseSpec& spec, ParticleSet& p) {
+void point_under_slivers(const CaseSpec& spec, const std::vector<const WallSpec*>& wall_of_body, ParticleSet& p) {
   auto& to_surface = p.vector_field(wall_surface_field);
   const Real sliver = 0.5 * spec.dp, step_in = 1e-6 * spec.dp;
-  for (const auto& w : spec.walls) {
-    if ((w.surface == nullptr && !w.round.has_value()) || w.is_container()) continue;
-    const auto own = std::find_if(p.bodies.begin(), p.bodies.end(), [&](const auto& b) { return b.name == w.name; });
-    const int body = static_cast<int>(own - p.bodies.begin());
+  for (std::size_t b = 0; b < wall_of_body.size(); ++b) {
+    if (wall_of_body[b] == nullptr || !wall_of_body[b]->is_shaped() || wall_of_body[b]->is_container()) continue;
+    const WallSpec& w = *wall_of_body[b];
+    const int body = static_cast<int>(b);
     const SignedDistance distance = wall_distance(w);
     const Vec lo = w.rect.lo.array() - spec.dp, hi = w.rect.hi.array() + spec.dp;
     Vec nearest;
@@ -364,6 +364,15 @@ void point_under_slivers(const CaseSpec& spec, ParticleSet& p) {
       if (depth > 0) to_surface[i] = depth * m;
     }
   }
+}
+
+/// Each body's wall spec (by name), or null for a body that is not a wall.
+std::vector<const WallSpec*> walls_by_body(const CaseSpec& spec, const ParticleSet& p) {
+  std::vector<const WallSpec*> wall_of_body(p.bodies.size(), nullptr);
+  for (std::size_t b = 0; b < p.bodies.size(); ++b)
+    for (const auto& w : spec.walls)
+      if (w.name == p.bodies[b].name && p.bodies[b].kind == ParticleKind::wall) wall_of_body[b] = &w;
+  return wall_of_body;
 }
 
 /// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart). The particles
@@ -409,13 +418,11 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
   if (scene.particles.has_vector_field(wall_surface_field)) {
     const WallCells cells(spec.dp, scene.particles);
     uncover_wall_corners(cells, scene.particles);
-    std::vector<char> shaped(scene.particles.bodies.size(), 0);
-    for (std::size_t b = 0; b < scene.particles.bodies.size(); ++b)
-      for (const auto& w : spec.walls)
-        if (w.name == scene.particles.bodies[b].name && scene.particles.bodies[b].kind == ParticleKind::wall)
-          shaped[b] = w.surface != nullptr || w.round.has_value();
+    const std::vector<const WallSpec*> wall_of_body = walls_by_body(spec, scene.particles);
+    std::vector<char> shaped(wall_of_body.size(), 0);
+    for (std::size_t b = 0; b < wall_of_body.size(); ++b) shaped[b] = wall_of_body[b] && wall_of_body[b]->is_shaped();
     uncover_shaped_walls(cells, shaped, spec.dp, scene.particles);
-    point_under_slivers(spec, scene.particles);
+    point_under_slivers(spec, wall_of_body, scene.particles);
   }
   return scene;
 }
