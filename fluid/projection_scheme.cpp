@@ -16,6 +16,21 @@ namespace mpsfsi::fluid_detail {
 
 namespace {
 
+/// What the projection computes from one arrangement of the particles (projection_geometry): the operator's
+/// derivatives, the wall groups and the free-surface pressures. Kept whole, so that a step's rows and its
+/// correction see one arrangement.
+struct Geometry {
+  std::vector<Vec> dn_self;            ///< dn_k/dx_k
+  std::vector<Vec> dn_pair;            ///< dn_j/dx_k for entry q (row k, neighbour j) of the near list
+  std::vector<Real> lap_weight;        ///< the weight w(r_jk) at re_gradient of entry q (stabilisation)
+  std::vector<Real> n_kernel, c_of;    ///< each particle's kernel density, sum_j -w' r
+  std::vector<Real> n_fluid;           ///< the fluid neighbours' part of n_kernel
+  Real projection_scale = 0;           ///< d / C of the projection
+  std::vector<LocalIndex> parent_of;   ///< the wall particle whose group a dummy joins, or -1
+  std::vector<Real> group_error;       ///< a group dummy's density minus its reference
+  std::vector<Real> surface_pressure;  ///< the pressure of each particle as a free-surface row
+};
+
 class ProjectionScheme final : public PressureScheme {
  public:
   ProjectionScheme(FluidCore& fluid_core, const FluidParameters& fluid)
@@ -68,7 +83,8 @@ class ProjectionScheme final : public PressureScheme {
   void prepare(Real) override {
     step_alpha = initial_step() ? start_alpha : stabilisation;
     linear_source = initial_step();
-    projection_geometry();
+    // The first solve on the positions before the step moved them.
+    projection_geometry(linear_source ? start_position : p.position);
     gram_ready = false;
   }
 
@@ -77,7 +93,7 @@ class ProjectionScheme final : public PressureScheme {
   /// The pressure a free-surface row holds: 0, or with the projection the hydrostatic pressure at a fluid
   /// particle's centre, half a spacing below the surface, rho dp / 2 max(0, -g . n) with n the outward normal
   /// -dn_k/dx_k / |dn_k/dx_k| (rho g dp / 2 on a level surface, 0 on a vertical one).
-  Real surface_value(const std::size_t i) const override { return surface_pressure[i]; }
+  Real surface_value(const std::size_t i) const override { return geo.surface_pressure[i]; }
 
   int max_solves() const override { return max_active_set_solves; }
 
@@ -126,20 +142,18 @@ class ProjectionScheme final : public PressureScheme {
   /// and the scale d / C of the force, C the mean over the interior fluid particles of sum_j -w'(r_ij) r_ij
   /// (sum_j re / r_ij = n0 + N0 on the lattice for the MPS weight), so that -(d/C) N^T p is -grad p for a
   /// linear pressure on the current arrangement.
-  void projection_geometry() {
+  void projection_geometry(const std::vector<Vec>& x) {
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n = near.n_particles();
     // The near list holds the pairs within re_g of particles that take part (build_near_list): entry q of
     // row k, neighbour j, gets dn_j/dx_k; by the symmetry of w, dn_k/dx_k is their sum.
     // Also the kernel's number density n_k and sum_j -w'(r_jk) r_jk (C of the particle).
-    dn_pair.resize(near.n_pairs());
-    lap_weight.resize(step_alpha > 0 ? near.n_pairs() : 0);
-    dn_self.resize(n);
-    n_kernel.resize(n);
-    n_fluid.resize(n);
-    c_of.resize(n);
-    // The first solve on the positions before the step moved them.
-    const std::vector<Vec>& x = linear_source ? start_position : p.position;
+    geo.dn_pair.resize(near.n_pairs());
+    geo.lap_weight.resize(step_alpha > 0 ? near.n_pairs() : 0);
+    geo.dn_self.resize(n);
+    geo.n_kernel.resize(n);
+    geo.n_fluid.resize(n);
+    geo.c_of.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
       Vec s = Vec::Zero();
       Real n_k = 0, n_f = 0, c_k = 0;
@@ -148,28 +162,28 @@ class ProjectionScheme final : public PressureScheme {
         const Vec r_jk = x[k] - x[j];
         const Real r = r_jk.norm();
         const KernelValue kv = kernel_at(kernel, r, re_p);
-        dn_pair[q] = (kv.dw / r) * r_jk;
-        if (step_alpha > 0) lap_weight[q] = weight(r, re_g);
-        s += dn_pair[q];
+        geo.dn_pair[q] = (kv.dw / r) * r_jk;
+        if (step_alpha > 0) geo.lap_weight[q] = weight(r, re_g);
+        s += geo.dn_pair[q];
         n_k += kv.w;
         if (roles[j] == Role::fluid) n_f += kv.w;
         c_k -= kv.dw * r;
       }
-      dn_self[k] = s;
-      n_kernel[k] = n_k;
-      n_fluid[k] = n_f;
-      c_of[k] = c_k;
+      geo.dn_self[k] = s;
+      geo.n_kernel[k] = n_k;
+      geo.n_fluid[k] = n_f;
+      geo.c_of[k] = c_k;
     }
     Real sums[2] = {0, 0};  // sum over the interior fluid particles of sum_j -w'(r_ij) r_ij, their count
     for (std::size_t i = 0; i < p.n_owned(); ++i) {
       if (roles[i] != Role::fluid || surface[i] != 0) continue;
-      sums[0] += c_of[i];
+      sums[0] += geo.c_of[i];
       sums[1] += 1;
     }
     MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);
     const Real c_sum = sums[1] > 0 ? sums[0] / sums[1] : c_lattice;
-    projection_scale = dim / c_sum;
-    wall_groups();
+    geo.projection_scale = dim / c_sum;
+    wall_groups(x);
     surface_pressures();
   }
 
@@ -179,10 +193,10 @@ class ProjectionScheme final : public PressureScheme {
   /// constrains the sum of its members' number densities (each against its initial value). Without it the
   /// dummies push with p = 0, and water at rest on the lattice feels a net force of up to 2.3 g toward the
   /// walls (docs/validation.md, ## Fluid).
-  void wall_groups() {
+  void wall_groups(const std::vector<Vec>& x) {
     const std::size_t n = near.n_particles();
-    parent_of.assign(n, -1);
-    group_error.assign(n, 0.0);
+    geo.parent_of.assign(n, -1);
+    geo.group_error.assign(n, 0.0);
     const auto& reference = p.scalar_field(reference_density_field);
     for (std::size_t m = 0; m < n; ++m) {
       if (p.kind[m] != ParticleKind::dummy || roles[m] != Role::dummy) continue;
@@ -190,22 +204,22 @@ class ProjectionScheme final : public PressureScheme {
       GlobalId best_id = 0;
       for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
         const auto j = static_cast<std::size_t>(near.index[q]);
-        const Real r2 = (p.position[j] - p.position[m]).squaredNorm();
+        const Real r2 = (x[j] - x[m]).squaredNorm();
         if (p.kind[j] != ParticleKind::wall || roles[j] != Role::boundary) continue;
         if (r2 < best * (1 - 1e-12) || (r2 <= best * (1 + 1e-12) && p.global_id[j] < best_id)) {
           best = r2;
           best_id = p.global_id[j];
-          parent_of[m] = static_cast<LocalIndex>(j);
+          geo.parent_of[m] = static_cast<LocalIndex>(j);
         }
       }
-      if (parent_of[m] >= 0) group_error[m] = n_kernel[m] - reference[m];
+      if (geo.parent_of[m] >= 0) geo.group_error[m] = geo.n_kernel[m] - reference[m];
     }
   }
 
   /// The pressure unknown (local column) of particle j: its own row, its wall group's, or none (-1).
   LocalIndex column_of(const std::size_t j) const {
     if (row_of[j] >= 0) return row_of[j];
-    if (j < parent_of.size() && parent_of[j] >= 0) return row_of[static_cast<std::size_t>(parent_of[j])];
+    if (j < geo.parent_of.size() && geo.parent_of[j] >= 0) return row_of[static_cast<std::size_t>(geo.parent_of[j])];
     return -1;
   }
 
@@ -217,7 +231,7 @@ class ProjectionScheme final : public PressureScheme {
     Real change = 0;
     for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
       const auto j = static_cast<std::size_t>(near.index[q]);
-      if (!fluid_only || roles[j] == Role::fluid) change += dn_pair[q].dot(d_i - (p.position[j] - start_position[j]));
+      if (!fluid_only || roles[j] == Role::fluid) change += geo.dn_pair[q].dot(d_i - (p.position[j] - start_position[j]));
     }
     return change;
   }
@@ -245,8 +259,8 @@ class ProjectionScheme final : public PressureScheme {
     column_particle.assign(n_columns, 0);
     for (std::size_t j = 0; j < p.size(); ++j)
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
-    const Real scale = (1.0 - step_alpha) * projection_scale / n0_kernel;
-    const Real lap_scale = step_alpha / (projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
+    const Real scale = (1.0 - step_alpha) * geo.projection_scale / n0_kernel;
+    const Real lap_scale = step_alpha / (geo.projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
     const auto add_column = [&](const std::size_t col, const Real v) {
       if (!touched_flag[col]) {
         touched_flag[col] = 1;
@@ -260,26 +274,26 @@ class ProjectionScheme final : public PressureScheme {
       lap_acc[col] += v;
     };
     // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
-    // (dn_pair of row k's entries).
+    // (geo.dn_pair of row k's entries).
     const auto visit_k = [&](const std::size_t k, const Vec& n_ik) {
-      if (has_row(roles[k])) add(k, n_ik.dot(dn_self[k]));
+      if (has_row(roles[k])) add(k, n_ik.dot(geo.dn_self[k]));
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
         const LocalIndex col = column_of(static_cast<std::size_t>(near.index[q]));
-        if (col >= 0) add_column(static_cast<std::size_t>(col), n_ik.dot(dn_pair[q]));
+        if (col >= 0) add_column(static_cast<std::size_t>(col), n_ik.dot(geo.dn_pair[q]));
       }
     };
     // The members of each row's wall group (dummies whose parent is the row's particle).
     member_ptr.assign(n_rows + 1, 0);
-    for (std::size_t m = 0; m < parent_of.size(); ++m)
-      if (parent_of[m] >= 0 && static_cast<std::size_t>(parent_of[m]) < p.n_owned())
-        ++member_ptr[static_cast<std::size_t>(row_of[static_cast<std::size_t>(parent_of[m])]) + 1];
+    for (std::size_t m = 0; m < geo.parent_of.size(); ++m)
+      if (geo.parent_of[m] >= 0 && static_cast<std::size_t>(geo.parent_of[m]) < p.n_owned())
+        ++member_ptr[static_cast<std::size_t>(row_of[static_cast<std::size_t>(geo.parent_of[m])]) + 1];
     for (std::size_t r = 0; r < n_rows; ++r) member_ptr[r + 1] += member_ptr[r];
     members.resize(member_ptr[n_rows]);
     {
       std::vector<std::size_t> fill(member_ptr.begin(), member_ptr.end() - 1);
-      for (std::size_t m = 0; m < parent_of.size(); ++m)
-        if (parent_of[m] >= 0 && static_cast<std::size_t>(parent_of[m]) < p.n_owned())
-          members[fill[static_cast<std::size_t>(row_of[static_cast<std::size_t>(parent_of[m])])]++] = static_cast<LocalIndex>(m);
+      for (std::size_t m = 0; m < geo.parent_of.size(); ++m)
+        if (geo.parent_of[m] >= 0 && static_cast<std::size_t>(geo.parent_of[m]) < p.n_owned())
+          members[fill[static_cast<std::size_t>(row_of[static_cast<std::size_t>(geo.parent_of[m])])]++] = static_cast<LocalIndex>(m);
     }
     // Each row's density error: its particle's against n0, plus its group's dummies' against their references.
     row_error.resize(n_rows);
@@ -294,24 +308,24 @@ class ProjectionScheme final : public PressureScheme {
         continue;
       }
       // A wall or solid row: its fluid neighbours' part of the density, and the rest at its reference.
-      const Real n_i = roles[i] == Role::fluid ? n_kernel[i] : n_fluid[i] + reference[i];
+      const Real n_i = roles[i] == Role::fluid ? geo.n_kernel[i] : geo.n_fluid[i] + reference[i];
       row_error[r] = n_i - n0_kernel + rest_offset[i] + rest_rate[i] * dt * dt;
-      for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) row_error[r] += group_error[static_cast<std::size_t>(members[e])];
+      for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) row_error[r] += geo.group_error[static_cast<std::size_t>(members[e])];
     }
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (step_alpha < 1) {  // G (at alpha = 1 the matrix is the scaled Laplacian alone)
-        if (roles[i] == Role::fluid) visit_k(i, dn_self[i]);
+        if (roles[i] == Role::fluid) visit_k(i, geo.dn_self[i]);
         // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
         for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
           const auto k = static_cast<std::size_t>(near.index[q]);
-          if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
+          if (roles[k] == Role::fluid) visit_k(k, -geo.dn_pair[q]);
         }
         for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) {
           const auto m = static_cast<std::size_t>(members[e]);
           for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
             const auto k = static_cast<std::size_t>(near.index[q]);
-            if (roles[k] == Role::fluid) visit_k(k, -dn_pair[q]);
+            if (roles[k] == Role::fluid) visit_k(k, -geo.dn_pair[q]);
           }
         }
       }
@@ -323,7 +337,7 @@ class ProjectionScheme final : public PressureScheme {
             const auto j = static_cast<std::size_t>(near.index[q]);
             const LocalIndex col = column_of(j);
             if (col < 0 || static_cast<std::size_t>(col) == r) continue;
-            const Real v = lap_scale * lap_weight[q];
+            const Real v = lap_scale * geo.lap_weight[q];
             add_laplacian_column(static_cast<std::size_t>(col), -v);
             add_laplacian_column(r, v);
           }
@@ -414,14 +428,14 @@ class ProjectionScheme final : public PressureScheme {
       const LocalIndex* col = sys.col.data() + sys.row_ptr[r];
       for (std::size_t k = 0; k < sys.row_ptr[r + 1] - sys.row_ptr[r]; ++k)
         value[k] = col[k] == static_cast<LocalIndex>(r) ? dirichlet_diag : 0.0;
-      sys.rhs[r] = dirichlet_diag * surface_pressure[i];
+      sys.rhs[r] = dirichlet_diag * geo.surface_pressure[i];
       return;
     }
     sys.rhs[r] = projection_source * row_error[r];
     for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
       const auto q = static_cast<std::size_t>(gram_col[e]);
       const auto j = static_cast<std::size_t>(column_particle[q]);
-      if (surface[j] != 0) sys.rhs[r] -= gram_val[e] * surface_pressure[j];
+      if (surface[j] != 0) sys.rhs[r] -= gram_val[e] * geo.surface_pressure[j];
       if (dry_column(q, n_rows)) continue;
       *value++ = surface[j] != 0 ? 0.0 : gram_val[e] + (q == r ? row_compress : 0.0);
     }
@@ -478,11 +492,9 @@ class ProjectionScheme final : public PressureScheme {
     linear_source = false;
     // The offsets on the geometry of the moved positions, which the next step's rows see; the correction of
     // this step on the geometry of its rows (the start's), kept aside meanwhile.
-    std::vector<Vec> start_pair, start_self;
-    std::swap(dn_pair, start_pair);
-    std::swap(dn_self, start_self);
-    const Real start_scale = projection_scale;
-    projection_geometry();
+    Geometry start;
+    std::swap(geo, start);
+    projection_geometry(p.position);
     build_gram(dt);  // G' of the later steps (the offsets are still 0: row_error is b)
     auto& rest_offset = p.scalar_field(rest_offset_field);
     auto& rest_rate = p.scalar_field(rest_rate_field);
@@ -498,9 +510,7 @@ class ProjectionScheme final : public PressureScheme {
       rest_offset[i] = pressure[i] * n0_kernel / (kappa * rho * c * c) - initial_error[i];
       rest_rate[i] = (g_p / s - (row_error[r] - initial_error[i])) / (dt * dt);
     }
-    std::swap(dn_pair, start_pair);
-    std::swap(dn_self, start_self);
-    projection_scale = start_scale;
+    geo = std::move(start);
     std::vector<Vec>().swap(start_position);
   }
 
@@ -520,14 +530,14 @@ class ProjectionScheme final : public PressureScheme {
     for (std::size_t k = 0; k < n; ++k) {
       dv[k].setZero();
       if (roles[k] != Role::fluid) continue;
-      Vec f = pressure[k] * dn_self[k];
+      Vec f = pressure[k] * geo.dn_self[k];
       const Real two_b = 2.0 * std::max(0.0, pressure[k] - p_cap);
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
         const auto j = static_cast<std::size_t>(near.index[q]);
-        if (has_row(roles[j])) f += (pressure[j] - two_b) * dn_pair[q];
-        else if (parent_of[j] >= 0) f += (pressure[static_cast<std::size_t>(parent_of[j])] - two_b) * dn_pair[q];
+        if (has_row(roles[j])) f += (pressure[j] - two_b) * geo.dn_pair[q];
+        else if (geo.parent_of[j] >= 0) f += (pressure[static_cast<std::size_t>(geo.parent_of[j])] - two_b) * geo.dn_pair[q];
       }
-      dv[k] = -dt / rho * projection_scale * f;
+      dv[k] = -dt / rho * geo.projection_scale * f;
     }
     for (std::size_t k = 0; k < n; ++k) {
       if (roles[k] != Role::fluid) continue;
@@ -540,12 +550,12 @@ class ProjectionScheme final : public PressureScheme {
   /// neighbours balance (|dn_k/dx_k| at round-off, inside a regular arrangement) has no normal: 0.
   void surface_pressures() {
     const std::size_t n = near.n_particles();
-    surface_pressure.assign(n, 0.0);
+    geo.surface_pressure.assign(n, 0.0);
     const Real no_normal = 1e-9 * n0_kernel / dp;
     for (std::size_t k = 0; k < n; ++k) {
-      const Real norm = dn_self[k].norm();
+      const Real norm = geo.dn_self[k].norm();
       if (roles[k] != Role::fluid || !(norm > no_normal)) continue;
-      surface_pressure[k] = 0.5 * rho * dp * std::max(0.0, gravity.dot(dn_self[k]) / norm);
+      geo.surface_pressure[k] = 0.5 * rho * dp * std::max(0.0, gravity.dot(geo.dn_self[k]) / norm);
     }
   }
 
@@ -584,20 +594,12 @@ class ProjectionScheme final : public PressureScheme {
   DensityKernel kernel = DensityKernel::wendland;  ///< fluid.projection_kernel
   Real n0_kernel = 0;             ///< n0 of that kernel at re_gradient
   Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
-  Real projection_scale = 0;      ///< d / C of the projection (projection_geometry)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
   Real row_compress = 0;          ///< the compressibility 1 / (c^2 dt^2) of the step's rows (assemble_projection)
 
-  std::vector<Vec> dn_self;              ///< projection: dn_k/dx_k
-  std::vector<Vec> dn_pair;              ///< projection: dn_j/dx_k for entry q (row k, neighbour j) of the near list
-  std::vector<Real> lap_weight;          ///< projection: the weight w(r_jk) at re_gradient of entry q (stabilisation)
-  std::vector<Real> surface_pressure;    ///< projection: the pressure of each particle as a free-surface row
-  std::vector<Real> n_kernel, c_of;      ///< projection: each particle's kernel density, sum_j -w' r
-  std::vector<Real> n_fluid;             ///< projection: the fluid neighbours' part of n_kernel
+  Geometry geo;                          ///< projection: the geometry of this step's rows and correction
   std::vector<Real> initial_error;       ///< projection, first step: each row's density error at the start
   std::vector<std::uint8_t> dry;         ///< projection: a wall or solid row without a fluid neighbour
-  std::vector<LocalIndex> parent_of;     ///< projection: the wall particle whose group a dummy joins, or -1
-  std::vector<Real> group_error;         ///< projection: a group dummy's density minus its reference
   std::vector<std::size_t> member_ptr;   ///< projection: each row's group dummies (CSR)
   std::vector<LocalIndex> members;
   std::vector<Real> row_error;           ///< projection: each row's density error (with its group's)
