@@ -9,6 +9,7 @@
 #include "core/operators.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -20,6 +21,9 @@ namespace {
 /// derivatives, the wall groups and the free-surface pressures. Kept whole, so that a step's rows and its
 /// correction see one arrangement.
 struct Geometry {
+  /// dn_self, dn_pair and c_of hold every particle's values; otherwise the fluid particles' only (the others'
+  /// dn_self and c_of are 0, their dn_pair entries undefined).
+  bool all_derivatives = true;
   std::vector<Vec> dn_self;            ///< dn_k/dx_k
   std::vector<Vec> dn_pair;            ///< dn_j/dx_k for entry q (row k, neighbour j) of the near list
   std::vector<Real> lap_weight;        ///< the weight w(r_jk) at re_gradient of entry q (stabilisation)
@@ -154,20 +158,34 @@ class ProjectionScheme final : public PressureScheme {
     geo.n_kernel.resize(n);
     geo.n_fluid.resize(n);
     geo.c_of.resize(n);
+    // Without G (stabilisation 1) only the fluid particles' derivatives are used (the correction, the surface
+    // pressures, C); the others' rows need their densities and the stabilisation's weights alone.
+    geo.all_derivatives = step_alpha < 1;
     for (std::size_t k = 0; k < n; ++k) {
       Vec s = Vec::Zero();
       Real n_k = 0, n_f = 0, c_k = 0;
-      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
-        const auto j = static_cast<std::size_t>(near.index[q]);
-        const Vec r_jk = x[k] - x[j];
-        const Real r = r_jk.norm();
-        const KernelValue kv = kernel_at(kernel, r, re_p);
-        geo.dn_pair[q] = (kv.dw / r) * r_jk;
-        if (step_alpha > 0) geo.lap_weight[q] = weight(r, re_g);
-        s += geo.dn_pair[q];
-        n_k += kv.w;
-        if (roles[j] == Role::fluid) n_f += kv.w;
-        c_k -= kv.dw * r;
+      if (geo.all_derivatives || roles[k] == Role::fluid) {
+        for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+          const auto j = static_cast<std::size_t>(near.index[q]);
+          const Vec r_jk = x[k] - x[j];
+          const Real r = r_jk.norm();
+          const KernelValue kv = kernel_at(kernel, r, re_p);
+          geo.dn_pair[q] = (kv.dw / r) * r_jk;
+          if (step_alpha > 0) geo.lap_weight[q] = weight(r, re_g);
+          s += geo.dn_pair[q];
+          n_k += kv.w;
+          if (roles[j] == Role::fluid) n_f += kv.w;
+          c_k -= kv.dw * r;
+        }
+      } else {
+        for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+          const auto j = static_cast<std::size_t>(near.index[q]);
+          const Real r = (x[k] - x[j]).norm();
+          const Real w = kernel_at(kernel, r, re_p).w;
+          if (step_alpha > 0) geo.lap_weight[q] = weight(r, re_g);
+          n_k += w;
+          if (roles[j] == Role::fluid) n_f += w;
+        }
       }
       geo.dn_self[k] = s;
       geo.n_kernel[k] = n_k;
@@ -227,6 +245,7 @@ class ProjectionScheme final : public PressureScheme {
   /// start (start_position): sum_j dw(r_ij)/dx_i . (d_i - d_j) over its neighbours (the fluid ones only for
   /// `fluid_only`, a wall or solid row, whose other neighbours count at their reference).
   Real linear_change(const std::size_t i, const bool fluid_only) const {
+    assert(geo.all_derivatives);
     const Vec d_i = p.position[i] - start_position[i];
     Real change = 0;
     for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
@@ -261,16 +280,19 @@ class ProjectionScheme final : public PressureScheme {
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
     const Real scale = (1.0 - step_alpha) * geo.projection_scale / n0_kernel;
     const Real lap_scale = step_alpha / (geo.projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
-    const auto add_column = [&](const std::size_t col, const Real v) {
+    const auto touch = [&](const std::size_t col) {
       if (!touched_flag[col]) {
         touched_flag[col] = 1;
         touched.push_back(static_cast<LocalIndex>(col));
       }
+    };
+    const auto add_column = [&](const std::size_t col, const Real v) {
+      touch(col);
       acc[col] += v;
     };
     const auto add = [&](const std::size_t j, const Real v) { add_column(static_cast<std::size_t>(row_of[j]), v); };
     const auto add_laplacian_column = [&](const std::size_t col, const Real v) {
-      add_column(col, 0.0);
+      touch(col);
       lap_acc[col] += v;
     };
     // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
@@ -315,6 +337,7 @@ class ProjectionScheme final : public PressureScheme {
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (step_alpha < 1) {  // G (at alpha = 1 the matrix is the scaled Laplacian alone)
+        assert(geo.all_derivatives);
         if (roles[i] == Role::fluid) visit_k(i, geo.dn_self[i]);
         // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
         for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
@@ -342,10 +365,7 @@ class ProjectionScheme final : public PressureScheme {
             add_laplacian_column(r, v);
           }
         }
-      if (!touched_flag[r]) {
-        touched_flag[r] = 1;
-        touched.push_back(static_cast<LocalIndex>(r));
-      }
+      touch(r);
       std::sort(touched.begin(), touched.end());
       for (const LocalIndex col : touched) {
         const auto q = static_cast<std::size_t>(col);
@@ -373,54 +393,54 @@ class ProjectionScheme final : public PressureScheme {
     }
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n_rows = particle_of_row.size();
+    const std::size_t n_columns = column_particle.size();
     // The first step solves for the incompressible pressure (kappa 1, start_compressibility of the case's).
     row_compress = (initial_step() ? start_compressibility : 1.0) / (c * c * dt * dt);
     projection_source = (initial_step() ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
     sys.values_only = !layout;
     sys.changed_rows.clear();
+    column_surface.resize(n_columns);
+    for (std::size_t q = 0; q < n_columns; ++q) column_surface[q] = surface[static_cast<std::size_t>(column_particle[q])] != 0;
     if (layout) {
+      // A dry row of this rank's: free surface through the step, no entry in its column.
+      column_dry.assign(n_columns, 0);
+      for (std::size_t q = 0; q < n_rows; ++q) column_dry[q] = dry[static_cast<std::size_t>(column_particle[q])];
       sys.col.clear();
       sys.value.clear();
       sys.row_ptr[0] = 0;
       for (std::size_t r = 0; r < n_rows; ++r) {
-        const auto i = static_cast<std::size_t>(particle_of_row[r]);
-        if (dry[i]) {
+        if (column_dry[r]) {
           sys.col.push_back(static_cast<LocalIndex>(r));
         } else {
           for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
-            if (!dry_column(static_cast<std::size_t>(gram_col[e]), n_rows)) sys.col.push_back(gram_col[e]);
+            if (!column_dry[static_cast<std::size_t>(gram_col[e])]) sys.col.push_back(gram_col[e]);
         }
         sys.row_ptr[r + 1] = sys.col.size();
         sys.value.resize(sys.col.size());
-        write_row(r);
+        write_row(r, surface);
       }
-      assembled_surface.assign(surface.begin(), surface.end());
+      assembled_column_surface = column_surface;
       return;
     }
+    // The columns whose free-surface flag changed since the last assembly; a row is rewritten when its own
+    // column (r) or one of its entries' did.
+    for (std::size_t q = 0; q < n_columns; ++q) assembled_column_surface[q] = assembled_column_surface[q] != column_surface[q];
+    const std::vector<std::uint8_t>& changed_column = assembled_column_surface;
     for (std::size_t r = 0; r < n_rows; ++r) {
-      const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      if (dry[i]) continue;
-      bool changed = surface[i] != assembled_surface[i];
-      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1] && !changed; ++e) {
-        const auto j = static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])]);
-        changed = surface[j] != assembled_surface[j];
-      }
+      if (column_dry[r]) continue;
+      bool changed = changed_column[r] != 0;
+      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1] && !changed; ++e)
+        changed = changed_column[static_cast<std::size_t>(gram_col[e])] != 0;
       if (!changed) continue;
-      write_row(r);
+      write_row(r, surface);
       sys.changed_rows.push_back(static_cast<LocalIndex>(r));
     }
-    assembled_surface.assign(surface.begin(), surface.end());
+    assembled_column_surface = column_surface;
   }
 
-  /// Whether column q is a dry row of this rank's (free surface through the step: no entry).
-  bool dry_column(const std::size_t q, const std::size_t n_rows) const {
-    return q < n_rows && dry[static_cast<std::size_t>(column_particle[q])];
-  }
-
-  /// Row r's values and right-hand side on the entries assemble_projection laid out.
-  void write_row(const std::size_t r) {
-    const auto& surface = p.scalar_field(fluid_fields::free_surface);
-    const std::size_t n_rows = particle_of_row.size();
+  /// Row r's values and right-hand side on the entries assemble_projection laid out (free-surface flags
+  /// `surface`, by column in column_surface).
+  void write_row(const std::size_t r, const std::vector<Real>& surface) {
     const auto i = static_cast<std::size_t>(particle_of_row[r]);
     Real* value = sys.value.data() + sys.row_ptr[r];
     if (surface[i] != 0) {
@@ -428,17 +448,21 @@ class ProjectionScheme final : public PressureScheme {
       const LocalIndex* col = sys.col.data() + sys.row_ptr[r];
       for (std::size_t k = 0; k < sys.row_ptr[r + 1] - sys.row_ptr[r]; ++k)
         value[k] = col[k] == static_cast<LocalIndex>(r) ? dirichlet_diag : 0.0;
-      sys.rhs[r] = dirichlet_diag * geo.surface_pressure[i];
+      sys.rhs[r] = dirichlet_diag * surface_pressure_of_column(r);
       return;
     }
     sys.rhs[r] = projection_source * row_error[r];
     for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
       const auto q = static_cast<std::size_t>(gram_col[e]);
-      const auto j = static_cast<std::size_t>(column_particle[q]);
-      if (surface[j] != 0) sys.rhs[r] -= gram_val[e] * geo.surface_pressure[j];
-      if (dry_column(q, n_rows)) continue;
-      *value++ = surface[j] != 0 ? 0.0 : gram_val[e] + (q == r ? row_compress : 0.0);
+      if (column_surface[q]) sys.rhs[r] -= gram_val[e] * surface_pressure_of_column(q);
+      if (column_dry[q]) continue;
+      *value++ = column_surface[q] ? 0.0 : gram_val[e] + (q == r ? row_compress : 0.0);
     }
+  }
+
+  /// The free-surface pressure of column q's particle.
+  Real surface_pressure_of_column(const std::size_t q) const {
+    return geo.surface_pressure[static_cast<std::size_t>(column_particle[q])];
   }
 
   /// The complementarity of the density constraint, p >= 0, w = A p - b >= 0, p w = 0 (a primal-dual active
@@ -616,7 +640,9 @@ class ProjectionScheme final : public PressureScheme {
   /// the error that G's correction removes, so that p0 does not depend on how far dt moves the fluid.
   bool linear_source = false;
   std::vector<Vec> start_position;          ///< the first step: every particle's position before it moves
-  std::vector<Real> assembled_surface;      ///< projection: the free-surface flags of the last assembly
+  std::vector<std::uint8_t> column_surface;            ///< projection: each column's free-surface flag
+  std::vector<std::uint8_t> assembled_column_surface;  ///< ... at the last assembly
+  std::vector<std::uint8_t> column_dry;                ///< projection: each column's dry flag (this step)
 };
 
 }  // namespace

@@ -8,7 +8,8 @@ cd "$(dirname "$0")/.."
 packages=(build-essential cmake git pkg-config
   trilinos-all-dev libptscotch-dev libeigen3-dev libopenmpi-dev openmpi-bin
   libvtk9-dev libgtest-dev libyaml-cpp-dev libcli11-dev libfmt-dev libbenchmark-dev
-  python3 python3-matplotlib python3-numpy python3-scipy python3-vtk9 python3-yaml xvfb xauth)
+  python3 python3-matplotlib python3-numpy python3-scipy python3-vtk9 python3-yaml xvfb xauth
+  valgrind)  # valgrind: bench/scheme_instructions.sh
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
