@@ -271,10 +271,14 @@ class ProjectionScheme final : public PressureScheme {
     acc.assign(n_columns, 0.0);
     lap_acc.assign(n_columns, 0.0);
     touched_flag.assign(n_columns, 0);
-    touched.clear();
+    touched.resize(n_columns);  // the columns of the row being built: touched[0, n_touched)
+    std::size_t n_touched = 0;
     gram_ptr.assign(n_rows + 1, 0);
     gram_col.clear();
     gram_val.clear();
+    // Each particle's pressure unknown (column_of), once.
+    column_of_particle.resize(p.size());
+    for (std::size_t j = 0; j < column_of_particle.size(); ++j) column_of_particle[j] = column_of(j);
     column_particle.assign(n_columns, 0);
     for (std::size_t j = 0; j < p.size(); ++j)
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
@@ -283,7 +287,7 @@ class ProjectionScheme final : public PressureScheme {
     const auto touch = [&](const std::size_t col) {
       if (!touched_flag[col]) {
         touched_flag[col] = 1;
-        touched.push_back(static_cast<LocalIndex>(col));
+        touched[n_touched++] = static_cast<LocalIndex>(col);
       }
     };
     const auto add_column = [&](const std::size_t col, const Real v) {
@@ -300,7 +304,7 @@ class ProjectionScheme final : public PressureScheme {
     const auto visit_k = [&](const std::size_t k, const Vec& n_ik) {
       if (has_row(roles[k])) add(k, n_ik.dot(geo.dn_self[k]));
       for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
-        const LocalIndex col = column_of(static_cast<std::size_t>(near.index[q]));
+        const LocalIndex col = column_of_particle[static_cast<std::size_t>(near.index[q])];
         if (col >= 0) add_column(static_cast<std::size_t>(col), n_ik.dot(geo.dn_pair[q]));
       }
     };
@@ -358,7 +362,7 @@ class ProjectionScheme final : public PressureScheme {
           const std::size_t a = e < member_ptr[r + 1] ? static_cast<std::size_t>(members[e]) : i;
           for (std::size_t q = near.begin(a); q < near.end(a); ++q) {
             const auto j = static_cast<std::size_t>(near.index[q]);
-            const LocalIndex col = column_of(j);
+            const LocalIndex col = column_of_particle[j];
             if (col < 0 || static_cast<std::size_t>(col) == r) continue;
             const Real v = lap_scale * geo.lap_weight[q];
             add_laplacian_column(static_cast<std::size_t>(col), -v);
@@ -366,8 +370,9 @@ class ProjectionScheme final : public PressureScheme {
           }
         }
       touch(r);
-      std::sort(touched.begin(), touched.end());
-      for (const LocalIndex col : touched) {
+      std::sort(touched.begin(), touched.begin() + static_cast<std::ptrdiff_t>(n_touched));
+      for (std::size_t t = 0; t < n_touched; ++t) {
+        const LocalIndex col = touched[t];
         const auto q = static_cast<std::size_t>(col);
         gram_col.push_back(col);
         gram_val.push_back(scale * acc[q] + lap_acc[q]);
@@ -375,7 +380,7 @@ class ProjectionScheme final : public PressureScheme {
         lap_acc[q] = 0;
         touched_flag[q] = 0;
       }
-      touched.clear();
+      n_touched = 0;
       gram_ptr[r + 1] = gram_col.size();
     }
   }
@@ -631,6 +636,7 @@ class ProjectionScheme final : public PressureScheme {
   std::vector<Real> lap_acc;             ///< ... and the stabilisation)
   std::vector<std::uint8_t> touched_flag;
   std::vector<LocalIndex> touched;
+  std::vector<LocalIndex> column_of_particle;  ///< projection: column_of of each particle in the near list (build_gram)
   std::vector<std::size_t> gram_ptr;     ///< projection: the operator G of build_gram (CRS, sorted columns)
   std::vector<LocalIndex> gram_col;
   std::vector<Real> gram_val;
