@@ -410,37 +410,68 @@ class ProjectionScheme final : public PressureScheme {
       // A dry row of this rank's: free surface through the step, no entry in its column.
       column_dry.assign(n_columns, 0);
       for (std::size_t q = 0; q < n_rows; ++q) column_dry[q] = dry[static_cast<std::size_t>(column_particle[q])];
-      sys.col.clear();
-      sys.value.clear();
+      // The entries: a dry row its diagonal alone, the others G's entries in the columns that are not dry.
+      sys.col.resize(gram_col.size() + n_rows);  // at most
+      std::size_t n_entries = 0;
       sys.row_ptr[0] = 0;
       for (std::size_t r = 0; r < n_rows; ++r) {
         if (column_dry[r]) {
-          sys.col.push_back(static_cast<LocalIndex>(r));
+          sys.col[n_entries++] = static_cast<LocalIndex>(r);
         } else {
           for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
-            if (!column_dry[static_cast<std::size_t>(gram_col[e])]) sys.col.push_back(gram_col[e]);
+            if (!column_dry[static_cast<std::size_t>(gram_col[e])]) sys.col[n_entries++] = gram_col[e];
         }
-        sys.row_ptr[r + 1] = sys.col.size();
-        sys.value.resize(sys.col.size());
-        write_row(r, surface);
+        sys.row_ptr[r + 1] = n_entries;
       }
+      sys.col.resize(n_entries);
+      sys.value.resize(n_entries);
+      remote_rows.clear();  // the rows with an entry in a column of another rank's row
+      for (std::size_t r = 0; r < n_rows; ++r)
+        if (gram_ptr[r + 1] > gram_ptr[r] && static_cast<std::size_t>(gram_col[gram_ptr[r + 1] - 1]) >= n_rows)
+          remote_rows.push_back(static_cast<LocalIndex>(r));
+      assert(pattern_is_symmetric());
+      for (std::size_t r = 0; r < n_rows; ++r) write_row(r, surface);
       assembled_column_surface = column_surface;
       return;
     }
     // The columns whose free-surface flag changed since the last assembly; a row is rewritten when its own
-    // column (r) or one of its entries' did.
+    // column (r) or one of its entries' did. G's pattern is symmetric (pattern_is_symmetric), so the rows with an
+    // entry in a changed column of this rank's are that column's own entries; a changed column of another rank's
+    // row is looked for in the rows that have such columns (remote_rows).
     for (std::size_t q = 0; q < n_columns; ++q) assembled_column_surface[q] = assembled_column_surface[q] != column_surface[q];
     const std::vector<std::uint8_t>& changed_column = assembled_column_surface;
+    rewrite.assign(n_rows, 0);
+    for (std::size_t q = 0; q < n_rows; ++q) {
+      if (!changed_column[q]) continue;
+      rewrite[q] = 1;
+      for (std::size_t e = gram_ptr[q]; e < gram_ptr[q + 1]; ++e)
+        if (static_cast<std::size_t>(gram_col[e]) < n_rows) rewrite[static_cast<std::size_t>(gram_col[e])] = 1;
+    }
+    if (std::find(changed_column.begin() + static_cast<std::ptrdiff_t>(n_rows), changed_column.end(), 1) != changed_column.end())
+      for (const LocalIndex r : remote_rows)
+        for (std::size_t e = gram_ptr[static_cast<std::size_t>(r)]; e < gram_ptr[static_cast<std::size_t>(r) + 1]; ++e)
+          if (changed_column[static_cast<std::size_t>(gram_col[e])]) rewrite[static_cast<std::size_t>(r)] = 1;
     for (std::size_t r = 0; r < n_rows; ++r) {
-      if (column_dry[r]) continue;
-      bool changed = changed_column[r] != 0;
-      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1] && !changed; ++e)
-        changed = changed_column[static_cast<std::size_t>(gram_col[e])] != 0;
-      if (!changed) continue;
+      if (!rewrite[r] || column_dry[r]) continue;
       write_row(r, surface);
       sys.changed_rows.push_back(static_cast<LocalIndex>(r));
     }
     assembled_column_surface = column_surface;
+  }
+
+  /// Whether every entry (r, c) of G between two rows of this rank's has its transpose (c, r) (build_gram: the
+  /// pairs of the near list, which holds both directions, and G = N N^T).
+  bool pattern_is_symmetric() const {
+    const std::size_t n_rows = particle_of_row.size();
+    for (std::size_t r = 0; r < n_rows; ++r)
+      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
+        const auto c = static_cast<std::size_t>(gram_col[e]);
+        if (c >= n_rows) continue;
+        if (!std::binary_search(gram_col.begin() + static_cast<std::ptrdiff_t>(gram_ptr[c]),
+                                gram_col.begin() + static_cast<std::ptrdiff_t>(gram_ptr[c + 1]), static_cast<LocalIndex>(r)))
+          return false;
+      }
+    return true;
   }
 
   /// Row r's values and right-hand side on the entries assemble_projection laid out (free-surface flags
@@ -649,6 +680,8 @@ class ProjectionScheme final : public PressureScheme {
   std::vector<std::uint8_t> column_surface;            ///< projection: each column's free-surface flag
   std::vector<std::uint8_t> assembled_column_surface;  ///< ... at the last assembly
   std::vector<std::uint8_t> column_dry;                ///< projection: each column's dry flag (this step)
+  std::vector<std::uint8_t> rewrite;                   ///< projection: the rows a re-assembly rewrites
+  std::vector<LocalIndex> remote_rows;                 ///< projection: the rows with columns of other ranks' rows
 };
 
 }  // namespace
