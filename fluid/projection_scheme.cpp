@@ -430,7 +430,7 @@ class ProjectionScheme final : public PressureScheme {
         if (gram_ptr[r + 1] > gram_ptr[r] && static_cast<std::size_t>(gram_col[gram_ptr[r + 1] - 1]) >= n_rows)
           remote_rows.push_back(static_cast<LocalIndex>(r));
       assert(pattern_is_symmetric());
-      for (std::size_t r = 0; r < n_rows; ++r) write_row(r, surface);
+      for (std::size_t r = 0; r < n_rows; ++r) write_row(r);
       assembled_column_surface = column_surface;
       return;
     }
@@ -438,22 +438,23 @@ class ProjectionScheme final : public PressureScheme {
     // column (r) or one of its entries' did. G's pattern is symmetric (pattern_is_symmetric), so the rows with an
     // entry in a changed column of this rank's are that column's own entries; a changed column of another rank's
     // row is looked for in the rows that have such columns (remote_rows).
-    for (std::size_t q = 0; q < n_columns; ++q) assembled_column_surface[q] = assembled_column_surface[q] != column_surface[q];
-    const std::vector<std::uint8_t>& changed_column = assembled_column_surface;
+    const auto changed_column = [&](const std::size_t q) { return column_surface[q] != assembled_column_surface[q]; };
     rewrite.assign(n_rows, 0);
     for (std::size_t q = 0; q < n_rows; ++q) {
-      if (!changed_column[q]) continue;
+      if (!changed_column(q)) continue;
       rewrite[q] = 1;
       for (std::size_t e = gram_ptr[q]; e < gram_ptr[q + 1]; ++e)
         if (static_cast<std::size_t>(gram_col[e]) < n_rows) rewrite[static_cast<std::size_t>(gram_col[e])] = 1;
     }
-    if (std::find(changed_column.begin() + static_cast<std::ptrdiff_t>(n_rows), changed_column.end(), 1) != changed_column.end())
+    bool remote_changed = false;
+    for (std::size_t q = n_rows; q < n_columns && !remote_changed; ++q) remote_changed = changed_column(q);
+    if (remote_changed)
       for (const LocalIndex r : remote_rows)
         for (std::size_t e = gram_ptr[static_cast<std::size_t>(r)]; e < gram_ptr[static_cast<std::size_t>(r) + 1]; ++e)
-          if (changed_column[static_cast<std::size_t>(gram_col[e])]) rewrite[static_cast<std::size_t>(r)] = 1;
+          if (changed_column(static_cast<std::size_t>(gram_col[e]))) rewrite[static_cast<std::size_t>(r)] = 1;
     for (std::size_t r = 0; r < n_rows; ++r) {
       if (!rewrite[r] || column_dry[r]) continue;
-      write_row(r, surface);
+      write_row(r);
       sys.changed_rows.push_back(static_cast<LocalIndex>(r));
     }
     assembled_column_surface = column_surface;
@@ -474,12 +475,11 @@ class ProjectionScheme final : public PressureScheme {
     return true;
   }
 
-  /// Row r's values and right-hand side on the entries assemble_projection laid out (free-surface flags
-  /// `surface`, by column in column_surface).
-  void write_row(const std::size_t r, const std::vector<Real>& surface) {
-    const auto i = static_cast<std::size_t>(particle_of_row[r]);
+  /// Row r's values and right-hand side on the entries assemble_projection laid out (the free-surface flags by
+  /// column, column_surface; row r's particle is column r's).
+  void write_row(const std::size_t r) {
     Real* value = sys.value.data() + sys.row_ptr[r];
-    if (surface[i] != 0) {
+    if (column_surface[r]) {
       const Real dirichlet_diag = 2.0 * dim / lat_l.lambda + row_compress;
       const LocalIndex* col = sys.col.data() + sys.row_ptr[r];
       for (std::size_t k = 0; k < sys.row_ptr[r + 1] - sys.row_ptr[r]; ++k)

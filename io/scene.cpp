@@ -289,10 +289,12 @@ void uncover_wall_corners(const WallCells& cells, ParticleSet& p) {
 /// hold water"). Along a shallow slope on the floor the covered foot is the nearest face of the particles up to
 /// 1.5 dp below the slope, over a stretch of dp / slope. Particles with no uncovered surface point within reach
 /// (deep in a body lying on another) are left as they are.
-void uncover_shaped_walls(const WallCells& cells, const std::vector<char>& shaped, const Real dp, ParticleSet& p) {
+void uncover_shaped_walls(const WallCells& cells, const std::vector<const WallSpec*>& wall_of_body, const Real dp,
+                          ParticleSet& p) {
   auto& to_surface = p.vector_field(wall_surface_field);
   const auto is_shaped = [&](const std::size_t i) {
-    return is_wall(p, i) && static_cast<std::size_t>(p.body[i]) < shaped.size() && shaped[static_cast<std::size_t>(p.body[i])];
+    const auto b = static_cast<std::size_t>(p.body[i]);
+    return is_wall(p, i) && b < wall_of_body.size() && wall_of_body[b] != nullptr && wall_of_body[b]->is_shaped();
   };
   std::vector<char> open(p.size(), 0);  // the particle's surface point is not covered
   std::vector<std::size_t> hidden;
@@ -419,9 +421,7 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
     const WallCells cells(spec.dp, scene.particles);
     uncover_wall_corners(cells, scene.particles);
     const std::vector<const WallSpec*> wall_of_body = walls_by_body(spec, scene.particles);
-    std::vector<char> shaped(wall_of_body.size(), 0);
-    for (std::size_t b = 0; b < wall_of_body.size(); ++b) shaped[b] = wall_of_body[b] && wall_of_body[b]->is_shaped();
-    uncover_shaped_walls(cells, shaped, spec.dp, scene.particles);
+    uncover_shaped_walls(cells, wall_of_body, spec.dp, scene.particles);
     point_under_slivers(spec, wall_of_body, scene.particles);
   }
   return scene;
