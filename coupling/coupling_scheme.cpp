@@ -33,10 +33,8 @@ namespace {
 void coupled_step(const CouplingParticipants& c, const Real t, const Real dt, const int n_sub,
                   const DataVector* displacement, CouplingWindow& w) {
   auto t0 = Clock::now();
-  if (displacement)
-    c.interface.prepare_fluid_boundary(dt, *displacement);
-  else
-    c.interface.prepare_fluid_boundary(dt);
+  c.fluid.set_solid_boundary(displacement ? c.interface.prepare_fluid_boundary(dt, *displacement)
+                                           : c.interface.prepare_fluid_boundary(dt));
   w.t_coupling += seconds_since(t0);
   t0 = Clock::now();
   w.fluid = c.fluid.advance(t, dt);

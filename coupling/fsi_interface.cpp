@@ -54,10 +54,9 @@ FsiInterface::FsiInterface(const CaseSpec& spec, ParticleSet& particles, const F
   n0_ = lattice_constants(dp_, re_).n0;
 }
 
-FluidOptions FsiInterface::fluid_options(const FsiOptions& options, FluidOptions base) {
+FluidOptions FsiInterface::fluid_options(FluidOptions base) {
   base.solid_as_boundary = false;
-  base.boundary_flag_field = options.flag_field;
-  if (options.freeze_solid_density) base.density_offset_field = options.offset_field;
+  base.coupled_solid = true;  // the coupling gives the fluid its view of the solid (prepare_fluid_boundary)
   return base;
 }
 
@@ -93,7 +92,6 @@ void FsiInterface::initialize() {
   for (const char* name : {field::prev_load, field::mean_v, field::saved_x, field::saved_v, field::start_x})
     p_.add_vector_field(name);
   p_.add_vector_field(opt_.load_field);
-  if (opt_.freeze_solid_density) p_.add_scalar_field(opt_.offset_field);
   sync();
   // (n_i^0)_solid: number density of each solid particle counting solid particles only (eq. 51), over this
   // rank's particles and ghosts.
@@ -121,19 +119,16 @@ void FsiInterface::initialize() {
   initialized_ = true;
 }
 
-void FsiInterface::prepare_fluid_boundary(const Real dt) {
-  if (!(opt_.midstep_predictor && dt > 0 && has_mean_v_)) {
-    view_solid(nullptr);
-    return;
-  }
+SolidBoundaryData FsiInterface::prepare_fluid_boundary(const Real dt) {
+  if (!(opt_.midstep_predictor && dt > 0 && has_mean_v_)) return view_solid(nullptr);
   const auto& mean_v = p_.vector_field(field::mean_v);
   const SolidView at_mid_step = [&](std::size_t, const std::size_t i) {
     return std::pair<Vec, Vec>(0.5 * dt * mean_v[i], mean_v[i]);
   };
-  view_solid(&at_mid_step);
+  return view_solid(&at_mid_step);
 }
 
-void FsiInterface::prepare_fluid_boundary(const Real dt, const Eigen::VectorXd& displacement) {
+SolidBoundaryData FsiInterface::prepare_fluid_boundary(const Real dt, const Eigen::VectorXd& displacement) {
   if (!(dt > 0)) throw std::invalid_argument("FsiInterface::prepare_fluid_boundary: dt must be positive");
   std::size_t n_solid = 0;
   for (std::size_t i = 0; i < p_.n_owned(); ++i) n_solid += p_.kind[i] == ParticleKind::solid ? 1 : 0;
@@ -144,7 +139,7 @@ void FsiInterface::prepare_fluid_boundary(const Real dt, const Eigen::VectorXd& 
     const Vec d = displacement.segment<dim>(static_cast<Eigen::Index>(dim * k));
     return std::pair<Vec, Vec>(d, d / dt);
   };
-  view_solid(&at_mid_step);
+  return view_solid(&at_mid_step);
 }
 
 std::vector<GlobalId> FsiInterface::solid_ids() const {
@@ -197,7 +192,7 @@ Eigen::VectorXd FsiInterface::step_displacement(const std::vector<GlobalId>& ids
   return out;
 }
 
-void FsiInterface::view_solid(const SolidView* view) {
+SolidBoundaryData FsiInterface::view_solid(const SolidView* view) {
   if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
   if (!p_.has_scalar_field(opt_.flag_field))
     throw std::logic_error("FsiInterface: the solid does not publish its surface flag '" + opt_.flag_field + "'");
@@ -215,8 +210,15 @@ void FsiInterface::view_solid(const SolidView* view) {
       p_.velocity[i] = velocity;
     }
   }
-  if (!opt_.freeze_solid_density) return;
-  sync();  // the ghosts at their predicted positions
+  if (opt_.freeze_solid_density) sync();  // the ghosts at their predicted positions (may migrate particles)
+  SolidBoundaryData data;
+  const auto& flag = p_.scalar_field(opt_.flag_field);
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) {
+      data.ids.push_back(p_.global_id[i]);
+      data.surface.push_back(flag[i] != 0 ? 1 : 0);
+    }
+  if (!opt_.freeze_solid_density) return data;
   solid_x_.clear();
   solid_i_.clear();
   for (std::size_t i = 0; i < p_.size(); ++i)
@@ -225,14 +227,15 @@ void FsiInterface::view_solid(const SolidView* view) {
       solid_i_.push_back(static_cast<LocalIndex>(i));
     }
   build_neighbour_list(solid_x_, re_, solid_nl_, solid_grid_);
-  auto& offset = p_.scalar_field(opt_.offset_field);
   const auto& n0_solid = p_.scalar_field(field::n0_solid);
+  // The owned solid particles come first among solid_x_, in local order: the order of data.ids.
+  data.density_offset.reserve(data.ids.size());
   for (std::size_t k = 0; k < solid_x_.size(); ++k) {
     const auto i = static_cast<std::size_t>(solid_i_[k]);
-    if (i >= p_.n_owned()) continue;
-    offset[i] = n0_solid[i] - number_density_at(solid_x_, solid_nl_, re_, k).n;
+    if (i >= p_.n_owned()) break;
+    data.density_offset.push_back(n0_solid[i] - number_density_at(solid_x_, solid_nl_, re_, k).n);
   }
-  if (dist_ && dist_->n_ranks() > 1) dist_->exchange_ghosts(p_, {opt_.offset_field}, ParticleKind::solid);
+  return data;
 }
 
 void FsiInterface::restore_solid() {

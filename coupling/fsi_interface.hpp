@@ -2,8 +2,9 @@
 // manner of preCICE. Fluid and solid share one ParticleSet; per fluid step the driver calls
 //   prepare_fluid_boundary()   (a) solid surface particles (field "surface", eq. 48) enter the fluid step as
 //                                  boundary particles with the solid's current position and velocity (PPE
-//                                  rows); interior solid particles are dummies. The fluid does this itself
-//                                  from FluidOptions::boundary_flag_field (see fluid_options()).
+//                                  rows); interior solid particles are dummies. It returns that view as
+//                                  typed data by global id (SolidBoundaryData), which the driver gives the
+//                                  fluid (FluidSolver::set_solid_boundary).
 //   <fluid advance>
 //   compute_load()             (b) reads the pressures and writes the interface force of eq. 50 on each
 //                                  wetted solid surface particle into the solid's field "solid_load"
@@ -58,15 +59,13 @@ struct FsiOptions {
   std::string flag_field = solid_fields::surface;  ///< solid surface flag (eq. 48), kept current by the solid
   std::string load_field = solid_fields::load;     ///< external force per particle read by the solid [N/m]
   std::string pressure_field = fluid_fields::pressure;  ///< the fluid's pressure (fluid and boundary particles) [Pa]
-  /// The fluid's PPE sees the solid at its initial number density: (a) writes (n_i^0)_solid - (n_i)_solid
-  /// into offset_field, which the fluid adds to n* of its boundary particles.
+  /// The fluid's PPE sees the solid at its initial number density: (a) gives the fluid (n_i^0)_solid - (n_i)_solid
+  /// of each solid particle (SolidBoundaryData::density_offset), which it adds to n* of its boundary particles.
   bool freeze_solid_density = true;
   /// The fluid sees the solid at the middle of the coming step: x^n + u dt/2 with velocity u, u the
   /// solid's mean velocity over the previous step (its displacement / dt, free of the sub-steps'
   /// oscillations). restore_solid() puts the solid's own state back after the fluid step.
   bool midstep_predictor = true;
-  /// Declared by the coupling (it writes the field), read by the fluid through FluidOptions.
-  std::string offset_field = "fsi_density_offset";
   /// Clamped solid particles (e.g. the foot of a plate embedded in the floor) are wall-like: they get no
   /// load and are left out of the j* of eq. 50 (their PPE pressure is spurious where their lattice and the
   /// floor's overlap). They stay PPE rows of the fluid like walls: as dummies the fluid leaks through the
@@ -102,22 +101,23 @@ class FsiInterface {
   FsiInterface(const CaseSpec& spec, ParticleSet& particles, const FsiOptions& options = {},
                Distribution* distribution = nullptr);
 
-  /// The fluid's options for a coupled run: solid surface particles are boundary, the rest dummies.
-  static FluidOptions fluid_options(const FsiOptions& options = {}, FluidOptions base = {});
+  /// The fluid's options for a coupled run: the fluid takes its view of the solid from prepare_fluid_boundary
+  /// (FluidSolver::set_solid_boundary) instead of seeing the solid as it is.
+  static FluidOptions fluid_options(FluidOptions base = {});
   const FsiOptions& options() const { return opt_; }
 
   /// (n_i^0)_solid of every solid particle from the current (initial) configuration, and the bodies.
   void initialize();
-  /// (a) Checks that the solid publishes its surface flag (the fluid reads it at its next step) and, with
-  /// freeze_solid_density, writes the density offset of the solid particles. With midstep_predictor the
-  /// fluid sees the solid at x + u dt / 2 with velocity u, u its mean velocity over the last step.
-  void prepare_fluid_boundary(Real dt = 0);
+  /// (a) The fluid's view of the solid for its next step, this rank's owned solid particles by global id: the
+  /// solid's surface flag and, with freeze_solid_density, the density offsets. With midstep_predictor the fluid
+  /// sees the solid at x + u dt / 2 with velocity u, u its mean velocity over the last step.
+  SolidBoundaryData prepare_fluid_boundary(Real dt = 0);
   /// (a) for an iteration of an implicit coupling: the fluid sees the solid where it is at the step's end,
   /// x + d, with velocity d / dt, d the solid's displacement over the coming step (this rank's owned solid
   /// particles, dim values each, in the order of solid_ids()): the pressure solve constrains the fluid's density
   /// at the step's end, so the boundary it sees must be there too. restore_solid() puts the solid's own state
   /// back after the fluid step.
-  void prepare_fluid_boundary(Real dt, const Eigen::VectorXd& displacement);
+  SolidBoundaryData prepare_fluid_boundary(Real dt, const Eigen::VectorXd& displacement);
   /// The global ids of this rank's owned solid particles, in local order: the entries of the interface data.
   std::vector<GlobalId> solid_ids() const;
   /// The displacement the solid would make over a step of dt at its mean velocity of the last step (zero
@@ -155,8 +155,8 @@ class FsiInterface {
   void sync();
   /// The fluid's view of the k-th owned solid particle i: the offset of its position and its velocity.
   using SolidView = std::function<std::pair<Vec, Vec>(std::size_t k, std::size_t i)>;
-  /// The fluid's view of the solid (nullptr: the solid as it is), then the density offsets.
-  void view_solid(const SolidView* view);
+  /// The fluid's view of the solid (nullptr: the solid as it is), then its flags and density offsets.
+  SolidBoundaryData view_solid(const SolidView* view);
   /// Sums the per-body force and wetted count (after compute_load) or work (after advance_solid) over the ranks.
   void reduce_bodies(bool force);
 

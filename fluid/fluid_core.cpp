@@ -9,6 +9,8 @@
 #include "core/ramp.hpp"
 #include "core/stopwatch.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -89,6 +91,10 @@ FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distributi
 
   p.add_scalar_field(fluid_fields::pressure, 0.0);
   p.add_scalar_field(fluid_fields::free_surface, 0.0);
+  if (opt.coupled_solid) {
+    p.add_scalar_field(solid_surface_field, 0.0);
+    p.add_scalar_field(solid_offset_field, 0.0);
+  }
   for (const auto& [name, spec] : setup.wall_motions) {
     const auto it = std::find_if(p.bodies.begin(), p.bodies.end(), [&](const auto& b) { return b.name == name; });
     if (it == p.bodies.end() || it->kind != ParticleKind::wall)
@@ -114,15 +120,46 @@ Role FluidCore::role(const ParticleKind k) const {
 
 // ---- phases of a step, one loop over a neighbour list each ----
 
+void FluidCore::set_solid_boundary(const SolidBoundaryData& data) {
+  const std::size_t n_ids = data.ids.size();
+  if (data.surface.size() != n_ids || !(data.density_offset.empty() || data.density_offset.size() == n_ids))
+    throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: {} ids, {} surface flags and {} density "
+                                       "offsets (expected one each, or no offsets)", n_ids, data.surface.size(),
+                                       data.density_offset.size()));
+  if (!opt.coupled_solid)
+    throw std::logic_error("FluidSolver::set_solid_boundary: the fluid was built without FluidOptions::coupled_solid");
+  auto& surface = p.scalar_field(solid_surface_field);
+  auto& offset = p.scalar_field(solid_offset_field);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.kind[i] != ParticleKind::solid) continue;
+    if (k >= n_ids || data.ids[k] != p.global_id[i])
+      throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: owned solid particle {} (global id {}) is "
+                                         "not entry {} of the data", i, p.global_id[i], k));
+    surface[i] = data.surface[k] != 0 ? 1.0 : 0.0;
+    offset[i] = data.density_offset.empty() ? 0.0 : data.density_offset[k];
+    ++k;
+  }
+  if (k != n_ids)
+    throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: {} ids for {} owned solid particles", n_ids, k));
+  solid_boundary = true;
+  solid_offsets = !data.density_offset.empty();
+}
+
+std::vector<std::string> FluidCore::solid_boundary_fields() const {
+  if (!solid_boundary) return {};
+  return {solid_surface_field, solid_offset_field};
+}
+
 void FluidCore::classify() {
   const std::size_t n = p.size();
   roles.resize(n);
   for (std::size_t i = 0; i < n; ++i) roles[i] = role(p.kind[i]);
-  // Coupled solids: flagged (surface) particles are boundary particles, the others dummies.
-  if (opt.boundary_flag_field.empty() || !p.has_scalar_field(opt.boundary_flag_field)) return;
-  const auto& flag = p.scalar_field(opt.boundary_flag_field);
+  // A coupled solid's view: its surface particles are boundary particles, the others dummies.
+  if (!solid_boundary) return;
+  const auto& surface = p.scalar_field(solid_surface_field);
   for (std::size_t i = 0; i < n; ++i)
-    if (p.kind[i] == ParticleKind::solid) roles[i] = flag[i] != 0 ? Role::boundary : Role::dummy;
+    if (p.kind[i] == ParticleKind::solid) roles[i] = surface[i] != 0 ? Role::boundary : Role::dummy;
 }
 
 /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own.
@@ -239,9 +276,7 @@ void FluidCore::density_and_surface(const bool keep_surface) {
   const bool warm_start = keep_surface && n_steps > 0;
   n_star.resize(n);
   auto& surface = p.scalar_field(fluid_fields::free_surface);
-  const std::vector<Real>* offset = nullptr;
-  if (!opt.density_offset_field.empty() && p.has_scalar_field(opt.density_offset_field))
-    offset = &p.scalar_field(opt.density_offset_field);
+  const std::vector<Real>* offset = solid_offsets ? &p.scalar_field(solid_offset_field) : nullptr;
   for (std::size_t i = 0; i < n; ++i) {
     // The near list holds exactly the pairs within re_g of particles that take part.
     const DensityAndCount d = roles[i] != Role::none ? number_density_at(p.position, near, re_g, i) : DensityAndCount{};

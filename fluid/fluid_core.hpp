@@ -46,7 +46,17 @@ struct FluidCore {
   /// rest (walls that move on their own).
   static constexpr const char* wall_reference_field = "wall_reference";
 
+  /// The particle fields that keep a coupled solid's view (FluidSolver::set_solid_boundary) with its particles:
+  /// 1 for a surface (boundary) particle, 0 for a dummy; the density offset.
+  static constexpr const char* solid_surface_field = "_fluid_solid_surface";
+  static constexpr const char* solid_offset_field = "_fluid_solid_offset";
+
   Role role(ParticleKind k) const;
+  /// Takes a coupled solid's view into the fields above (this rank's owned solid particles; see
+  /// FluidSolver::set_solid_boundary).
+  void set_solid_boundary(const SolidBoundaryData& data);
+  /// The fields of the coupled solid's view, for the ghosts' refresh (empty when there is none).
+  std::vector<std::string> solid_boundary_fields() const;
   /// roles of every particle (owned and ghosts) for this step.
   void classify();
   /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own
@@ -112,6 +122,8 @@ struct FluidCore {
   std::unique_ptr<PressureSolver> solver;
   std::size_t n_steps = 0;
   MPI_Comm comm = MPI_COMM_NULL;
+  bool solid_boundary = false;  ///< a coupled solid has set its view (set_solid_boundary)
+  bool solid_offsets = false;   ///< ... with density offsets
 
   // Work arrays, reused between steps.
   std::vector<Role> roles;

@@ -119,9 +119,11 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   // skin since they were built; in between, the ghosts' positions and velocities are refreshed.
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
   const bool reorder = m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0;
-  m.dist.renew(m.p, {"position", "velocity"}, std::nullopt, reorder, [&] {
+  const bool rebuilt = m.dist.renew(m.p, {"position", "velocity"}, std::nullopt, reorder, [&] {
     if (reorder) m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
   });
+  // A coupled solid's view was set on the owners: their ghosts get it here (a rebuild copied it already).
+  if (!rebuilt && m.solid_boundary) m.dist.exchange_ghosts(m.p, m.solid_boundary_fields(), ParticleKind::solid);
   report.t_halo += seconds_since(t0);
   t0 = Clock::now();
   m.classify();
@@ -249,6 +251,8 @@ void FluidSolver::set_density_tolerance_cap(const Real cap) {
   if (!(cap > 0)) throw std::invalid_argument("FluidSolver::set_density_tolerance_cap: a cap > 0 expected");
   impl_->density_tolerance_cap = cap;
 }
+
+void FluidSolver::set_solid_boundary(const SolidBoundaryData& data) { impl_->set_solid_boundary(data); }
 
 std::size_t FluidSolver::memory_bytes() const {
   const Impl& m = *impl_;

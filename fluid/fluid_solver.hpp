@@ -12,8 +12,10 @@
 
 #include <mpi.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace mpsfsi {
 
@@ -49,14 +51,21 @@ struct FluidOptions {
   /// Solid particles take part as boundary particles with prescribed position and velocity (PPE rows,
   /// number density, collisions), like wall particles. Off: solids are ignored by the fluid.
   bool solid_as_boundary = false;
-  /// Coupled runs: a solid particle whose scalar field of this name is != 0 is a boundary particle
-  /// (prescribed position and velocity, PPE row); the other solid particles are dummies (number density
-  /// only). Empty, or the field not registered: as solid_as_boundary says. Read at every step.
-  std::string boundary_flag_field;
-  /// Coupled runs: a scalar field added to the number density n* of boundary particles in the PPE
-  /// source and the free-surface check (the coupling puts (n^0)_solid - (n)_solid there, so that the
-  /// solid's own deformation does not act as a fluid density error). Empty or not registered: none.
-  std::string density_offset_field;
+  /// Coupled runs: a coupling gives the fluid its view of the solid before each step
+  /// (FluidSolver::set_solid_boundary); the fluid registers the particle fields that keep it.
+  bool coupled_solid = false;
+};
+
+/// What a coupled solid shows the fluid for its next step: typed interface data, by global id, of each of this
+/// rank's owned solid particles (in the manner of a preCICE participant's read data). A particle on the solid's
+/// surface (eq. 48) is a boundary particle of the fluid (prescribed position and velocity, PPE row), one inside it a
+/// dummy (number density only). density_offset (empty: none) is added to n* of a surface particle in the PPE source
+/// and the free-surface check: the coupling puts (n^0)_solid - (n)_solid there, so that the solid's own deformation
+/// does not act as a fluid density error.
+struct SolidBoundaryData {
+  std::vector<GlobalId> ids;          ///< this rank's owned solid particles, in local order
+  std::vector<std::uint8_t> surface;  ///< 1: on the surface (boundary), 0: inside (dummy); one per id
+  std::vector<Real> density_offset;   ///< one per id, or empty
 };
 
 /// The largest interaction radius of the fluid [m] (the neighbour search's): the distribution's halo
@@ -129,6 +138,13 @@ class FluidSolver {
   /// coupling that iterates a step sets it, so that the fluid's answer is exact to well below the coupling's
   /// tolerance. With fluid.density_tolerance 0 (relative tolerance only) it changes nothing.
   void set_density_tolerance_cap(Real cap);
+
+  /// A coupled solid's view for the coming steps (until the next call): which solid particles are boundary
+  /// particles and which dummies, and their density offsets. Without a call the solid takes part as
+  /// FluidOptions::solid_as_boundary says. Needs FluidOptions::coupled_solid. The fluid keeps the values with its particles and refreshes their
+  /// ghosts itself. Throws std::logic_error when the ids are not this rank's owned solid particles in local
+  /// order, or without FluidOptions::coupled_solid.
+  void set_solid_boundary(const SolidBoundaryData& data);
 
   /// Diagnostics and tests: this rank's rows of the last pressure system, the particle (local index at
   /// the time of the solve) of each row, and the lattice constants used (density/gradient, Laplacian).

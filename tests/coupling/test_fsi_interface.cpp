@@ -1,7 +1,8 @@
 // Interface force of the fluid-solid coupling (seed 004 eq. 50-51, coupling/fsi_interface.hpp): a plate of
 // solid particles beside water with a prescribed hydrostatic pressure field carries rho g h^2 / 2 per unit
 // width, pushed away from the water; no fluid, no force; the work of the load equals the energy the solid
-// gains; the sub-cycling ratio.
+// gains; the sub-cycling ratio; the fluid sees the solid through the typed data the interface gives it.
+#include "core/distribution.hpp"
 #include "coupling/fsi_interface.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -10,7 +11,9 @@
 #include <gtest/gtest.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 
 using namespace mpsfsi;
 
@@ -156,4 +159,73 @@ TEST(FsiInterface, Subcycles) {
   EXPECT_EQ(c.n, 4);
   EXPECT_TRUE(c.raised);
   EXPECT_EQ(choose_subcycles(0, 1e-6, 3e-5).n, 1);
+}
+
+TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
+  const CaseSpec spec = plate_case(true, true);
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), p, dist, FsiInterface::fluid_options()};
+  SolidSolver solid(solid_setup(spec), p);
+  FsiInterface fsi(spec, p);
+  fsi.initialize();
+  SolidBoundaryData data = fsi.prepare_fluid_boundary();
+  // This rank's owned solid particles by global id, the solid's own surface flags, and density offsets that are
+  // zero on the undeformed solid.
+  ASSERT_EQ(data.ids, fsi.solid_ids());
+  ASSERT_EQ(data.surface.size(), data.ids.size());
+  ASSERT_EQ(data.density_offset.size(), data.ids.size());
+  const auto& surface = p.scalar_field("surface");
+  std::set<GlobalId> on_surface;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.kind[i] != ParticleKind::solid) continue;
+    EXPECT_EQ(data.surface[k], surface[i] != 0 ? 1 : 0) << "solid particle " << p.global_id[i];
+    EXPECT_EQ(data.density_offset[k], 0.0);
+    if (surface[i] != 0) on_surface.insert(p.global_id[i]);
+    ++k;
+  }
+  ASSERT_GT(on_surface.size(), 10U);
+  ASSERT_LT(on_surface.size(), data.ids.size());
+  const auto solid_rows = [&] {
+    std::set<GlobalId> rows;
+    for (const LocalIndex r : fluid.row_particles())
+      if (p.kind[static_cast<std::size_t>(r)] == ParticleKind::solid) rows.insert(p.global_id[static_cast<std::size_t>(r)]);
+    return rows;
+  };
+  // The fluid gives the surface particles pressure rows and none of the others.
+  fluid.set_solid_boundary(data);
+  fluid.advance(0, 1e-4);
+  EXPECT_EQ(solid_rows(), on_surface);
+  // The view is the data's, not the solid's field: every particle a dummy, no solid rows.
+  data = fsi.prepare_fluid_boundary();
+  std::fill(data.surface.begin(), data.surface.end(), 0);
+  fluid.set_solid_boundary(data);
+  fluid.advance(1e-4, 1e-4);
+  EXPECT_TRUE(solid_rows().empty());
+  // Data that is not this rank's owned solid particles in local order is refused.
+  SolidBoundaryData stale = data;
+  std::swap(stale.ids.front(), stale.ids.back());
+  EXPECT_THROW(fluid.set_solid_boundary(stale), std::logic_error);
+  stale = data;
+  stale.ids.pop_back();
+  stale.surface.pop_back();
+  stale.density_offset.pop_back();
+  EXPECT_THROW(fluid.set_solid_boundary(stale), std::logic_error);
+  stale = data;
+  stale.density_offset.pop_back();
+  EXPECT_THROW(fluid.set_solid_boundary(stale), std::logic_error);
+}
+
+TEST(FsiInterface, AFluidBuiltWithoutACoupledSolidRefusesItsView) {
+  const CaseSpec spec = plate_case(true, true);
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), p, dist};
+  SolidSolver solid(solid_setup(spec), p);
+  FsiInterface fsi(spec, p);
+  fsi.initialize();
+  EXPECT_THROW(fluid.set_solid_boundary(fsi.prepare_fluid_boundary()), std::logic_error);
 }
