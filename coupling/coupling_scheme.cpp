@@ -28,8 +28,8 @@ void CouplingScheme::load_state(BinaryReader& in) {
 
 namespace {
 
-/// One coupled step: (a) the fluid's view of the solid (the mid-step prediction, or x + d / 2 with velocity
-/// d / dt for a given displacement d), the fluid step, the solid's own state back, (b) the load, (c) the solid.
+/// One coupled step: (a) the fluid's view of the solid (the mid-step prediction, or x + d with velocity d / dt
+/// for a given displacement d), given to the fluid as typed data, the fluid step, (b) the load, (c) the solid.
 void coupled_step(const CouplingParticipants& c, const Real t, const Real dt, const int n_sub,
                   const DataVector* displacement, CouplingWindow& w) {
   auto t0 = Clock::now();
@@ -38,7 +38,6 @@ void coupled_step(const CouplingParticipants& c, const Real t, const Real dt, co
   w.t_coupling += seconds_since(t0);
   t0 = Clock::now();
   w.fluid = c.fluid.advance(t, dt);
-  c.interface.restore_solid();
   w.t_fluid += seconds_since(t0);
   t0 = Clock::now();
   c.interface.compute_load();

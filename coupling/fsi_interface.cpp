@@ -40,8 +40,6 @@ constexpr const char* n0_solid = "_fsi_n0_solid";      ///< (n_i^0)_solid of eq.
 constexpr const char* prev_load = "_fsi_prev_load";    ///< the load applied in the previous step
 constexpr const char* had_load = "_fsi_had_load";      ///< 1: prev_load holds a load (the particle was wetted)
 constexpr const char* mean_v = "_fsi_mean_v";          ///< the solid's mean velocity over the last step
-constexpr const char* saved_x = "_fsi_saved_x";        ///< the solid's own state during the fluid step
-constexpr const char* saved_v = "_fsi_saved_v";
 constexpr const char* start_x = "_fsi_start_x";        ///< the solid's position at the start of advance_solid
 }  // namespace field
 }  // namespace
@@ -89,7 +87,7 @@ void FsiInterface::reduce_bodies(const bool force) {
 
 void FsiInterface::initialize() {
   for (const char* name : {field::n0_solid, field::had_load}) p_.add_scalar_field(name);
-  for (const char* name : {field::prev_load, field::mean_v, field::saved_x, field::saved_v, field::start_x})
+  for (const char* name : {field::prev_load, field::mean_v, field::start_x})
     p_.add_vector_field(name);
   p_.add_vector_field(opt_.load_field);
   sync();
@@ -196,59 +194,27 @@ SolidBoundaryData FsiInterface::view_solid(const SolidView* view) {
   if (!initialized_) throw std::logic_error("FsiInterface: call initialize() first");
   if (!p_.has_scalar_field(opt_.flag_field))
     throw std::logic_error("FsiInterface: the solid does not publish its surface flag '" + opt_.flag_field + "'");
-  predicted_ = view != nullptr;
-  if (predicted_) {
-    auto& saved_x = p_.vector_field(field::saved_x);
-    auto& saved_v = p_.vector_field(field::saved_v);
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < p_.n_owned(); ++i) {
-      if (p_.kind[i] != ParticleKind::solid) continue;
-      saved_x[i] = p_.position[i];
-      saved_v[i] = p_.velocity[i];
-      const auto [offset, velocity] = (*view)(k++, i);
-      p_.position[i] += offset;
-      p_.velocity[i] = velocity;
-    }
-  }
-  if (opt_.freeze_solid_density) sync();  // the ghosts at their predicted positions (may migrate particles)
   SolidBoundaryData data;
+  data.density_offsets = opt_.freeze_solid_density;
   const auto& flag = p_.scalar_field(opt_.flag_field);
-  for (std::size_t i = 0; i < p_.n_owned(); ++i)
-    if (p_.kind[i] == ParticleKind::solid) {
-      data.ids.push_back(p_.global_id[i]);
-      data.surface.push_back(flag[i] != 0 ? 1 : 0);
-    }
-  if (!opt_.freeze_solid_density) return data;
-  solid_x_.clear();
-  solid_i_.clear();
-  for (std::size_t i = 0; i < p_.size(); ++i)
-    if (p_.kind[i] == ParticleKind::solid) {
-      solid_x_.push_back(p_.position[i]);
-      solid_i_.push_back(static_cast<LocalIndex>(i));
-    }
-  build_neighbour_list(solid_x_, re_, solid_nl_, solid_grid_);
   const auto& n0_solid = p_.scalar_field(field::n0_solid);
-  // The owned solid particles come first among solid_x_, in local order: the order of data.ids.
-  data.density_offset.reserve(data.ids.size());
-  for (std::size_t k = 0; k < solid_x_.size(); ++k) {
-    const auto i = static_cast<std::size_t>(solid_i_[k]);
-    if (i >= p_.n_owned()) break;
-    data.density_offset.push_back(n0_solid[i] - number_density_at(solid_x_, solid_nl_, re_, k).n);
-  }
-  return data;
-}
-
-void FsiInterface::restore_solid() {
-  if (!predicted_) return;
-  // The saved state travelled with its particle if the fluid step moved it to another rank.
-  const auto& saved_x = p_.vector_field(field::saved_x);
-  const auto& saved_v = p_.vector_field(field::saved_v);
+  std::size_t k = 0;
   for (std::size_t i = 0; i < p_.n_owned(); ++i) {
     if (p_.kind[i] != ParticleKind::solid) continue;
-    p_.position[i] = saved_x[i];
-    p_.velocity[i] = saved_v[i];
+    data.ids.push_back(p_.global_id[i]);
+    data.surface.push_back(flag[i] != 0 ? 1 : 0);
+    if (view) {
+      const auto [offset, velocity] = (*view)(k, i);
+      data.position.push_back(p_.position[i] + offset);
+      data.velocity.push_back(velocity);
+    } else {
+      data.position.push_back(p_.position[i]);
+      data.velocity.push_back(p_.velocity[i]);
+    }
+    if (opt_.freeze_solid_density) data.reference_density.push_back(n0_solid[i]);
+    ++k;
   }
-  predicted_ = false;
+  return data;
 }
 
 void FsiInterface::compute_load() {

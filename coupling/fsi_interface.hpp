@@ -1,10 +1,11 @@
 // Partitioned fluid-solid coupling of seed 004 §4.5-4.6 (eq. 49-51), shaped as a participant loop in the
 // manner of preCICE. Fluid and solid share one ParticleSet; per fluid step the driver calls
 //   prepare_fluid_boundary()   (a) solid surface particles (field "surface", eq. 48) enter the fluid step as
-//                                  boundary particles with the solid's current position and velocity (PPE
-//                                  rows); interior solid particles are dummies. It returns that view as
-//                                  typed data by global id (SolidBoundaryData), which the driver gives the
-//                                  fluid (FluidSolver::set_solid_boundary).
+//                                  boundary particles (PPE rows) where the coupling scheme says the fluid
+//                                  sees them (the solid's position, a mid-step prediction or an iterate);
+//                                  interior solid particles are dummies. It returns that view as typed data
+//                                  by global id (SolidBoundaryData), which the driver gives the fluid
+//                                  (FluidSolver::set_solid_boundary); the particle set is not written.
 //   <fluid advance>
 //   compute_load()             (b) reads the pressures and writes the interface force of eq. 50 on each
 //                                  wetted solid surface particle into the solid's field "solid_load"
@@ -59,12 +60,13 @@ struct FsiOptions {
   std::string flag_field = solid_fields::surface;  ///< solid surface flag (eq. 48), kept current by the solid
   std::string load_field = solid_fields::load;     ///< external force per particle read by the solid [N/m]
   std::string pressure_field = fluid_fields::pressure;  ///< the fluid's pressure (fluid and boundary particles) [Pa]
-  /// The fluid's PPE sees the solid at its initial number density: (a) gives the fluid (n_i^0)_solid - (n_i)_solid
-  /// of each solid particle (SolidBoundaryData::density_offset), which it adds to n* of its boundary particles.
+  /// The fluid's PPE sees the solid at its initial number density: (a) gives the fluid (n_i^0)_solid of each solid
+  /// particle (SolidBoundaryData::reference_density); the fluid adds (n_i^0)_solid - (n_i)_solid, taken where it
+  /// sees the solid, to n* of its boundary particles.
   bool freeze_solid_density = true;
   /// The fluid sees the solid at the middle of the coming step: x^n + u dt/2 with velocity u, u the
   /// solid's mean velocity over the previous step (its displacement / dt, free of the sub-steps'
-  /// oscillations). restore_solid() puts the solid's own state back after the fluid step.
+  /// oscillations). The solid's own state is not touched: the view is typed data the fluid reads.
   bool midstep_predictor = true;
   /// Clamped solid particles (e.g. the foot of a plate embedded in the floor) are wall-like: they get no
   /// load and are left out of the j* of eq. 50 (their PPE pressure is spurious where their lattice and the
@@ -109,14 +111,14 @@ class FsiInterface {
   /// (n_i^0)_solid of every solid particle from the current (initial) configuration, and the bodies.
   void initialize();
   /// (a) The fluid's view of the solid for its next step, this rank's owned solid particles by global id: the
-  /// solid's surface flag and, with freeze_solid_density, the density offsets. With midstep_predictor the fluid
-  /// sees the solid at x + u dt / 2 with velocity u, u its mean velocity over the last step.
+  /// solid's surface flag, where the fluid sees each particle and with which velocity, and with
+  /// freeze_solid_density the reference densities (n_i^0)_solid. With midstep_predictor the fluid sees the solid
+  /// at x + u dt / 2 with velocity u, u its mean velocity over the last step; else where it is.
   SolidBoundaryData prepare_fluid_boundary(Real dt = 0);
   /// (a) for an iteration of an implicit coupling: the fluid sees the solid where it is at the step's end,
   /// x + d, with velocity d / dt, d the solid's displacement over the coming step (this rank's owned solid
   /// particles, dim values each, in the order of solid_ids()): the pressure solve constrains the fluid's density
-  /// at the step's end, so the boundary it sees must be there too. restore_solid() puts the solid's own state
-  /// back after the fluid step.
+  /// at the step's end, so the boundary it sees must be there too.
   SolidBoundaryData prepare_fluid_boundary(Real dt, const Eigen::VectorXd& displacement);
   /// The global ids of this rank's owned solid particles, in local order: the entries of the interface data.
   std::vector<GlobalId> solid_ids() const;
@@ -127,8 +129,6 @@ class FsiInterface {
   /// solid_ids() when the step began; particles that moved to another rank meanwhile are fetched from it).
   /// A collective.
   Eigen::VectorXd step_displacement(const std::vector<GlobalId>& ids) const;
-  /// After the fluid step: the solid's own positions and velocities back (midstep_predictor).
-  void restore_solid();
   /// (b) Eq. 50 from the current pressures into the load field; totals per body.
   void compute_load();
   /// (c) + (d) n_sub solid sub-steps of dt / n_sub from t with the load held; the work F . v dt of
@@ -155,7 +155,7 @@ class FsiInterface {
   void sync();
   /// The fluid's view of the k-th owned solid particle i: the offset of its position and its velocity.
   using SolidView = std::function<std::pair<Vec, Vec>(std::size_t k, std::size_t i)>;
-  /// The fluid's view of the solid (nullptr: the solid as it is), then its flags and density offsets.
+  /// The fluid's view of the solid (nullptr: the solid as it is) with its flags and reference densities.
   SolidBoundaryData view_solid(const SolidView* view);
   /// Sums the per-body force and wetted count (after compute_load) or work (after advance_solid) over the ranks.
   void reduce_bodies(bool force);
@@ -168,11 +168,6 @@ class FsiInterface {
   bool has_mean_v_ = false;              ///< the solid's mean velocity (field) is set: the predictor applies
   std::vector<InterfaceBody> bodies_;
   std::vector<int> body_slot_;           ///< ParticleSet body -> index into bodies_, or -1
-  bool predicted_ = false;               ///< the solid is at its predicted state (restore_solid puts it back)
-  std::vector<Vec> solid_x_;             ///< scratch: solid positions (offset field)
-  std::vector<LocalIndex> solid_i_;
-  NeighbourList solid_nl_;
-  CellGrid solid_grid_;
   CellGrid grid_;
   std::vector<LocalIndex> rows_;  ///< compute_load: the loaded solid surface particles
   NeighbourList rows_nl_;         ///< compute_load: their neighbours among all particles

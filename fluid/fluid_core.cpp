@@ -92,8 +92,8 @@ FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distributi
   p.add_scalar_field(fluid_fields::pressure, 0.0);
   p.add_scalar_field(fluid_fields::free_surface, 0.0);
   if (opt.coupled_solid) {
-    p.add_scalar_field(solid_surface_field, 0.0);
-    p.add_scalar_field(solid_offset_field, 0.0);
+    for (const char* name : {solid_surface_field, solid_reference_field, solid_offset_field}) p.add_scalar_field(name, 0.0);
+    for (const char* name : {solid_x_field, solid_v_field}) p.add_vector_field(name);
   }
   for (const auto& [name, spec] : setup.wall_motions) {
     const auto it = std::find_if(p.bodies.begin(), p.bodies.end(), [&](const auto& b) { return b.name == name; });
@@ -121,15 +121,21 @@ Role FluidCore::role(const ParticleKind k) const {
 // ---- phases of a step, one loop over a neighbour list each ----
 
 void FluidCore::set_solid_boundary(const SolidBoundaryData& data) {
-  const std::size_t n_ids = data.ids.size();
-  if (data.surface.size() != n_ids || !(data.density_offset.empty() || data.density_offset.size() == n_ids))
-    throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: {} ids, {} surface flags and {} density "
-                                       "offsets (expected one each, or no offsets)", n_ids, data.surface.size(),
-                                       data.density_offset.size()));
   if (!opt.coupled_solid)
     throw std::logic_error("FluidSolver::set_solid_boundary: the fluid was built without FluidOptions::coupled_solid");
+  const std::size_t n_ids = data.ids.size();
+  if (data.surface.size() != n_ids || data.position.size() != n_ids || data.velocity.size() != n_ids ||
+      data.reference_density.size() != (data.density_offsets ? n_ids : 0))
+    throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: {} ids, {} surface flags, {} positions, {} "
+                                       "velocities and {} reference densities (expected one each; no densities "
+                                       "without density_offsets)",
+                                       n_ids, data.surface.size(), data.position.size(), data.velocity.size(),
+                                       data.reference_density.size()));
+  if (solid_view_placed) throw std::logic_error("FluidSolver::set_solid_boundary: called within a step");
   auto& surface = p.scalar_field(solid_surface_field);
-  auto& offset = p.scalar_field(solid_offset_field);
+  auto& reference = p.scalar_field(solid_reference_field);
+  auto& view_x = p.vector_field(solid_x_field);
+  auto& view_v = p.vector_field(solid_v_field);
   std::size_t k = 0;
   for (std::size_t i = 0; i < p.n_owned(); ++i) {
     if (p.kind[i] != ParticleKind::solid) continue;
@@ -137,18 +143,68 @@ void FluidCore::set_solid_boundary(const SolidBoundaryData& data) {
       throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: owned solid particle {} (global id {}) is "
                                          "not entry {} of the data", i, p.global_id[i], k));
     surface[i] = data.surface[k] != 0 ? 1.0 : 0.0;
-    offset[i] = data.density_offset.empty() ? 0.0 : data.density_offset[k];
+    reference[i] = data.density_offsets ? data.reference_density[k] : 0.0;
+    view_x[i] = data.position[k];
+    view_v[i] = data.velocity[k];
     ++k;
   }
   if (k != n_ids)
     throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: {} ids for {} owned solid particles", n_ids, k));
   solid_boundary = true;
-  solid_offsets = !data.density_offset.empty();
+  solid_offsets = data.density_offsets;
+  solid_view_new = true;
 }
 
 std::vector<std::string> FluidCore::solid_boundary_fields() const {
   if (!solid_boundary) return {};
-  return {solid_surface_field, solid_offset_field};
+  return {solid_surface_field};
+}
+
+double FluidCore::place_solid_view() {
+  if (!solid_view_new) return 0;
+  solid_view_new = false;
+  auto& view_x = p.vector_field(solid_x_field);
+  auto& view_v = p.vector_field(solid_v_field);
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (p.kind[i] == ParticleKind::solid) {
+      std::swap(p.position[i], view_x[i]);
+      std::swap(p.velocity[i], view_v[i]);
+    }
+  solid_view_placed = true;
+  if (!solid_offsets) return 0;
+  // The solid's ghosts where the fluid sees them (the view travels with particles that change their rank); a
+  // collective: every rank's view has density_offsets alike.
+  const auto t0 = Clock::now();
+  dist.renew(p, {"position", "velocity"}, ParticleKind::solid);
+  const double t_halo = seconds_since(t0);
+  solid_x.clear();
+  solid_at.clear();
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.kind[i] == ParticleKind::solid) {
+      solid_x.push_back(p.position[i]);
+      solid_at.push_back(static_cast<LocalIndex>(i));
+    }
+  build_neighbour_list(solid_x, re_g, solid_nl, solid_grid);
+  auto& offset = p.scalar_field(solid_offset_field);
+  const auto& reference = p.scalar_field(solid_reference_field);
+  for (std::size_t k = 0; k < solid_x.size(); ++k) {
+    const auto i = static_cast<std::size_t>(solid_at[k]);
+    if (i < p.n_owned()) offset[i] = reference[i] - number_density_at(solid_x, solid_nl, re_g, k).n;  // eq. 51
+  }
+  return t_halo;
+}
+
+void FluidCore::release_solid_view() {
+  if (!solid_view_placed) return;
+  // The view's fields travelled with their particles if the step moved them to another rank.
+  auto& view_x = p.vector_field(solid_x_field);
+  auto& view_v = p.vector_field(solid_v_field);
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (p.kind[i] == ParticleKind::solid) {
+      std::swap(p.position[i], view_x[i]);
+      std::swap(p.velocity[i], view_v[i]);
+    }
+  solid_view_placed = false;
 }
 
 void FluidCore::classify() {

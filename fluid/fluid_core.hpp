@@ -47,16 +47,26 @@ struct FluidCore {
   static constexpr const char* wall_reference_field = "wall_reference";
 
   /// The particle fields that keep a coupled solid's view (FluidSolver::set_solid_boundary) with its particles:
-  /// 1 for a surface (boundary) particle, 0 for a dummy; the density offset.
+  /// 1 for a surface (boundary) particle, 0 for a dummy; the reference density (n^0)_solid and the density
+  /// offset; the position and velocity of the view, which hold the solid's own while the step runs.
   static constexpr const char* solid_surface_field = "_fluid_solid_surface";
+  static constexpr const char* solid_reference_field = "_fluid_solid_n0";
   static constexpr const char* solid_offset_field = "_fluid_solid_offset";
+  static constexpr const char* solid_x_field = "_fluid_solid_x";
+  static constexpr const char* solid_v_field = "_fluid_solid_v";
 
   Role role(ParticleKind k) const;
   /// Takes a coupled solid's view into the fields above (this rank's owned solid particles; see
   /// FluidSolver::set_solid_boundary).
   void set_solid_boundary(const SolidBoundaryData& data);
-  /// The fields of the coupled solid's view, for the ghosts' refresh (empty when there is none).
+  /// The fields of the coupled solid's view that ghosts need (empty when there is none).
   std::vector<std::string> solid_boundary_fields() const;
+  /// At the start of a step with a new view: the owned solid particles take the view's position and velocity
+  /// (theirs are kept in its fields); with reference densities the solid ghosts are renewed and the density
+  /// offsets taken where the fluid sees the solid. Returns the halo time [s].
+  double place_solid_view();
+  /// At the end of the step: the owned solid particles get their own position and velocity back.
+  void release_solid_view();
   /// roles of every particle (owned and ghosts) for this step.
   void classify();
   /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own
@@ -124,6 +134,12 @@ struct FluidCore {
   MPI_Comm comm = MPI_COMM_NULL;
   bool solid_boundary = false;  ///< a coupled solid has set its view (set_solid_boundary)
   bool solid_offsets = false;   ///< ... with density offsets
+  bool solid_view_new = false;  ///< set_solid_boundary was called since the last step
+  bool solid_view_placed = false;  ///< the owned solid particles hold the view (place_solid_view)
+  std::vector<Vec> solid_x;  ///< scratch of place_solid_view: the solid particles' positions (owned and ghosts)
+  std::vector<LocalIndex> solid_at;  ///< their local indices
+  NeighbourList solid_nl;
+  CellGrid solid_grid;
 
   // Work arrays, reused between steps.
   std::vector<Role> roles;

@@ -117,6 +117,8 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   const auto t_begin = t0;
   // Owners and ghosts are renewed (with the cell order now and then) when a particle has moved half the
   // skin since they were built; in between, the ghosts' positions and velocities are refreshed.
+  report.t_halo += m.place_solid_view();  // a coupled solid's view for this step
+  t0 = Clock::now();
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
   const bool reorder = m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0;
   const bool rebuilt = m.dist.renew(m.p, {"position", "velocity"}, std::nullopt, reorder, [&] {
@@ -218,6 +220,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.n_rows = counts[1];
   report.n_removed = counts[2];
   report.n_put_back = counts[3];
+  m.release_solid_view();
   ++m.n_steps;
   const double total = seconds_since(t_begin);
   report.t_rest = total - report.t_neighbours - report.t_assembly - report.t_setup - report.t_solve - report.t_halo;

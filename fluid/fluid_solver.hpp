@@ -59,13 +59,18 @@ struct FluidOptions {
 /// What a coupled solid shows the fluid for its next step: typed interface data, by global id, of each of this
 /// rank's owned solid particles (in the manner of a preCICE participant's read data). A particle on the solid's
 /// surface (eq. 48) is a boundary particle of the fluid (prescribed position and velocity, PPE row), one inside it a
-/// dummy (number density only). density_offset (empty: none) is added to n* of a surface particle in the PPE source
-/// and the free-surface check: the coupling puts (n^0)_solid - (n)_solid there, so that the solid's own deformation
-/// does not act as a fluid density error.
+/// dummy (number density only). The fluid sees each particle at `position` with `velocity` for its next step and
+/// leaves the solid's own state as it found it. With density_offsets, the fluid adds (n^0)_solid - (n)_solid
+/// to n* of a surface particle in the PPE source and the free-surface check, (n)_solid the number density of the
+/// solid's particles alone where the fluid sees them, so that the solid's own deformation does not act as a fluid
+/// density error.
 struct SolidBoundaryData {
-  std::vector<GlobalId> ids;          ///< this rank's owned solid particles, in local order
-  std::vector<std::uint8_t> surface;  ///< 1: on the surface (boundary), 0: inside (dummy); one per id
-  std::vector<Real> density_offset;   ///< one per id, or empty
+  std::vector<GlobalId> ids;            ///< this rank's owned solid particles, in local order
+  std::vector<std::uint8_t> surface;    ///< 1: on the surface (boundary), 0: inside (dummy); one per id
+  std::vector<Vec> position;            ///< where the fluid sees each particle in its next step
+  std::vector<Vec> velocity;            ///< and with which velocity
+  std::vector<Real> reference_density;  ///< (n^0)_solid of each when density_offsets
+  bool density_offsets = false;         ///< the fluid takes density offsets (the same on every rank)
 };
 
 /// The largest interaction radius of the fluid [m] (the neighbour search's): the distribution's halo
@@ -139,11 +144,11 @@ class FluidSolver {
   /// tolerance. With fluid.density_tolerance 0 (relative tolerance only) it changes nothing.
   void set_density_tolerance_cap(Real cap);
 
-  /// A coupled solid's view for the coming steps (until the next call): which solid particles are boundary
-  /// particles and which dummies, and their density offsets. Without a call the solid takes part as
-  /// FluidOptions::solid_as_boundary says. Needs FluidOptions::coupled_solid. The fluid keeps the values with its particles and refreshes their
-  /// ghosts itself. Throws std::logic_error when the ids are not this rank's owned solid particles in local
-  /// order, or without FluidOptions::coupled_solid.
+  /// A coupled solid's view: where the solid is for the next step (positions and velocities), and until the next
+  /// call which solid particles are boundary particles and which dummies, and their density offsets. Without a
+  /// call the solid takes part as FluidOptions::solid_as_boundary says. Needs FluidOptions::coupled_solid. The
+  /// fluid keeps the values with its particles and refreshes their ghosts itself. Throws std::logic_error when the
+  /// ids are not this rank's owned solid particles in local order, or without FluidOptions::coupled_solid.
   void set_solid_boundary(const SolidBoundaryData& data);
 
   /// Diagnostics and tests: this rank's rows of the last pressure system, the particle (local index at

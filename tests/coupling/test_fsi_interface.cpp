@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 
 using namespace mpsfsi;
@@ -171,18 +172,23 @@ TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
   FsiInterface fsi(spec, p);
   fsi.initialize();
   SolidBoundaryData data = fsi.prepare_fluid_boundary();
-  // This rank's owned solid particles by global id, the solid's own surface flags, and density offsets that are
-  // zero on the undeformed solid.
+  // This rank's owned solid particles by global id, the solid's own surface flags, where it is (no step yet, so
+  // no predictor) and its reference densities.
   ASSERT_EQ(data.ids, fsi.solid_ids());
   ASSERT_EQ(data.surface.size(), data.ids.size());
-  ASSERT_EQ(data.density_offset.size(), data.ids.size());
+  ASSERT_EQ(data.position.size(), data.ids.size());
+  ASSERT_EQ(data.velocity.size(), data.ids.size());
+  ASSERT_TRUE(data.density_offsets);
+  ASSERT_EQ(data.reference_density.size(), data.ids.size());
   const auto& surface = p.scalar_field("surface");
   std::set<GlobalId> on_surface;
   std::size_t k = 0;
   for (std::size_t i = 0; i < p.n_owned(); ++i) {
     if (p.kind[i] != ParticleKind::solid) continue;
     EXPECT_EQ(data.surface[k], surface[i] != 0 ? 1 : 0) << "solid particle " << p.global_id[i];
-    EXPECT_EQ(data.density_offset[k], 0.0);
+    EXPECT_EQ(data.position[k], p.position[i]);
+    EXPECT_EQ(data.velocity[k], p.velocity[i]);
+    EXPECT_GT(data.reference_density[k], 0.0);
     if (surface[i] != 0) on_surface.insert(p.global_id[i]);
     ++k;
   }
@@ -198,11 +204,48 @@ TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
   fluid.set_solid_boundary(data);
   fluid.advance(0, 1e-4);
   EXPECT_EQ(solid_rows(), on_surface);
+  // The fluid sees the solid where the data puts it, for one step, and leaves the solid's own state as it was: a
+  // view moving away from the water at 1 m/s pulls on the water (the wetted face's pressure falls), and the
+  // solid's particles are where they were.
+  const auto wetted_pressure = [&] {
+    const auto& pressure = p.scalar_field("pressure");
+    Real sum = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < p.n_owned(); ++i)
+      if (p.kind[i] == ParticleKind::solid && surface[i] != 0 && p.position[i][0] < 0.1 + dp && p.position[i][1] > 0 &&
+          p.position[i][1] < h) {
+        sum += pressure[i];
+        ++n;
+      }
+    return sum / std::max(n, 1);
+  };
+  const Real p_at_rest = wetted_pressure();
+  std::map<GlobalId, std::pair<Vec, Vec>> before;
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (p.kind[i] == ParticleKind::solid) before[p.global_id[i]] = {p.position[i], p.velocity[i]};
+  data = fsi.prepare_fluid_boundary();
+  const Vec shift = Vec::UnitX() * 1e-3;
+  for (std::size_t q = 0; q < data.ids.size(); ++q) {
+    data.position[q] += shift;
+    data.velocity[q] = Vec::UnitX();
+  }
+  fluid.set_solid_boundary(data);
+  fluid.advance(1e-4, 1e-4);
+  const Real p_pulled = wetted_pressure();
+  std::printf("  wetted face: %.1f Pa with the solid at rest, %.1f Pa when the view moves away at 1 m/s\n", p_at_rest,
+              p_pulled);
+  EXPECT_GT(p_at_rest, 0.2 * rho * g * h);
+  EXPECT_LT(p_pulled, 0.5 * p_at_rest);
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (p.kind[i] == ParticleKind::solid) {
+      EXPECT_EQ(p.position[i], before[p.global_id[i]].first);
+      EXPECT_EQ(p.velocity[i], before[p.global_id[i]].second);
+    }
   // The view is the data's, not the solid's field: every particle a dummy, no solid rows.
   data = fsi.prepare_fluid_boundary();
   std::fill(data.surface.begin(), data.surface.end(), 0);
   fluid.set_solid_boundary(data);
-  fluid.advance(1e-4, 1e-4);
+  fluid.advance(2e-4, 1e-4);
   EXPECT_TRUE(solid_rows().empty());
   // Data that is not this rank's owned solid particles in local order is refused.
   SolidBoundaryData stale = data;
@@ -211,10 +254,15 @@ TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
   stale = data;
   stale.ids.pop_back();
   stale.surface.pop_back();
-  stale.density_offset.pop_back();
+  stale.position.pop_back();
+  stale.velocity.pop_back();
+  stale.reference_density.pop_back();
   EXPECT_THROW(fluid.set_solid_boundary(stale), std::logic_error);
   stale = data;
-  stale.density_offset.pop_back();
+  stale.reference_density.pop_back();
+  EXPECT_THROW(fluid.set_solid_boundary(stale), std::logic_error);
+  stale = data;
+  stale.density_offsets = false;  // densities given, but no offsets asked for
   EXPECT_THROW(fluid.set_solid_boundary(stale), std::logic_error);
 }
 
