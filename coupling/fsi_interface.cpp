@@ -41,6 +41,7 @@ constexpr const char* prev_load = "_fsi_prev_load";    ///< the load applied in 
 constexpr const char* had_load = "_fsi_had_load";      ///< 1: prev_load holds a load (the particle was wetted)
 constexpr const char* mean_v = "_fsi_mean_v";          ///< the solid's mean velocity over the last step
 constexpr const char* start_x = "_fsi_start_x";        ///< the solid's position at the start of advance_solid
+constexpr const char* load = "_fsi_load";              ///< the interface force of the last compute_load
 }  // namespace field
 }  // namespace
 
@@ -87,9 +88,8 @@ void FsiInterface::reduce_bodies(const bool force) {
 
 void FsiInterface::initialize() {
   for (const char* name : {field::n0_solid, field::had_load}) p_.add_scalar_field(name);
-  for (const char* name : {field::prev_load, field::mean_v, field::start_x})
+  for (const char* name : {field::load, field::prev_load, field::mean_v, field::start_x})
     p_.add_vector_field(name);
-  p_.add_vector_field(opt_.load_field);
   sync();
   // (n_i^0)_solid: number density of each solid particle counting solid particles only (eq. 51), over this
   // rank's particles and ghosts.
@@ -222,7 +222,7 @@ void FsiInterface::compute_load() {
   // The ghosts as their owners hold them after the fluid step (positions, pressures, surface flags); rebuilt
   // when the fluid step removed particles that left the domain (the ghost plan then no longer fits).
   if (dist_ && dist_->n_ranks() > 1) dist_->renew(p_, {"position", opt_.pressure_field, opt_.flag_field});
-  auto& load = p_.vector_field(opt_.load_field);
+  auto& load = p_.vector_field(field::load);
   const auto& flag = p_.scalar_field(opt_.flag_field);
   const auto& pressure = p_.scalar_field(opt_.pressure_field);
   const auto& n0_solid = p_.scalar_field(field::n0_solid);
@@ -279,11 +279,23 @@ void FsiInterface::compute_load() {
   reduce_bodies(true);
 }
 
+SolidLoadData FsiInterface::interface_load() const {
+  SolidLoadData data;
+  const auto& load = p_.vector_field(field::load);
+  for (std::size_t i = 0; i < p_.n_owned(); ++i)
+    if (p_.kind[i] == ParticleKind::solid) {
+      data.ids.push_back(p_.global_id[i]);
+      data.force.push_back(load[i]);
+    }
+  return data;
+}
+
 void FsiInterface::advance_solid(SolidSolver& solid, const Real t, const Real dt, const int n_sub) {
   if (n_sub < 1) throw std::invalid_argument(fmt::format("FsiInterface::advance_solid: n_sub = {} < 1", n_sub));
   const Real dts = dt / n_sub;
+  solid.set_interface_load(interface_load());
   for (auto& b : bodies_) b.work_step = 0;
-  const auto& load = p_.vector_field(opt_.load_field);
+  const auto& load = p_.vector_field(field::load);
   auto& start_x = p_.vector_field(field::start_x);
   for (std::size_t i = 0; i < p_.n_owned(); ++i)
     if (p_.kind[i] == ParticleKind::solid) start_x[i] = p_.position[i];

@@ -7,8 +7,8 @@
 //                                  by global id (SolidBoundaryData), which the driver gives the fluid
 //                                  (FluidSolver::set_solid_boundary); the particle set is not written.
 //   <fluid advance>
-//   compute_load()             (b) reads the pressures and writes the interface force of eq. 50 on each
-//                                  wetted solid surface particle into the solid's field "solid_load"
+//   compute_load()             (b) reads the pressures and computes the interface force of eq. 50 on each
+//                                  wetted solid surface particle (interface_load(): typed data by global id)
 //   advance_solid(...)         (c) advances the solid N sub-steps of dt / N with that load held, and
 //                                  integrates the work the load does; (d) the solid's new position and
 //                                  velocity are in the shared set, which is what the fluid sees next step.
@@ -38,6 +38,7 @@
 #include "core/particles.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
+#include "solid/solid_solver.hpp"
 
 #include <Eigen/Core>
 
@@ -49,7 +50,6 @@
 
 namespace mpsfsi {
 
-class SolidSolver;
 class Distribution;
 class BinaryWriter;
 class BinaryReader;
@@ -58,7 +58,6 @@ struct FsiOptions {
   enum class Normalisation { lattice, seed };
   Normalisation normalisation = Normalisation::lattice;
   std::string flag_field = solid_fields::surface;  ///< solid surface flag (eq. 48), kept current by the solid
-  std::string load_field = solid_fields::load;     ///< external force per particle read by the solid [N/m]
   std::string pressure_field = fluid_fields::pressure;  ///< the fluid's pressure (fluid and boundary particles) [Pa]
   /// The fluid's PPE sees the solid at its initial number density: (a) gives the fluid (n_i^0)_solid of each solid
   /// particle (SolidBoundaryData::reference_density); the fluid adds (n_i^0)_solid - (n_i)_solid, taken where it
@@ -129,10 +128,14 @@ class FsiInterface {
   /// solid_ids() when the step began; particles that moved to another rank meanwhile are fetched from it).
   /// A collective.
   Eigen::VectorXd step_displacement(const std::vector<GlobalId>& ids) const;
-  /// (b) Eq. 50 from the current pressures into the load field; totals per body.
+  /// (b) Eq. 50 from the current pressures: the interface force of each solid particle (interface_load());
+  /// totals per body.
   void compute_load();
-  /// (c) + (d) n_sub solid sub-steps of dt / n_sub from t with the load held; the work F . v dt of
-  /// every sub-step is summed per body.
+  /// The interface forces of the last compute_load, by global id: this rank's owned solid particles in local order
+  /// (zero where not wetted) [N per unit thickness in 2D].
+  SolidLoadData interface_load() const;
+  /// (c) + (d) gives the solid the load (SolidSolver::set_interface_load) and runs n_sub solid sub-steps of
+  /// dt / n_sub from t with it held; the work F . v dt of every sub-step is summed per body.
   void advance_solid(SolidSolver& solid, Real t, Real dt, int n_sub);
 
   const std::vector<InterfaceBody>& bodies() const { return bodies_; }

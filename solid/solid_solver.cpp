@@ -983,6 +983,25 @@ Real SolidSolver::stable_dt() const {
   return impl_->dt_factor * impl_->dp / impl_->c_p_max;
 }
 
+void SolidSolver::set_interface_load(const SolidLoadData& data) {
+  ParticleSet& p = impl_->p;
+  auto& load = *impl_->f_load;
+  if (data.force.size() != data.ids.size())
+    throw std::logic_error(fmt::format("SolidSolver::set_interface_load: {} ids and {} forces", data.ids.size(),
+                                       data.force.size()));
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.kind[i] != ParticleKind::solid) continue;
+    if (k >= data.ids.size() || data.ids[k] != p.global_id[i])
+      throw std::logic_error(fmt::format("SolidSolver::set_interface_load: owned solid particle {} (global id {}) is "
+                                         "not entry {} of the data", i, p.global_id[i], k));
+    load[i] = data.force[k++];
+  }
+  if (k != data.ids.size())
+    throw std::logic_error(fmt::format("SolidSolver::set_interface_load: {} ids for {} owned solid particles",
+                                       data.ids.size(), k));
+}
+
 SolidStepReport SolidSolver::advance(const Real t, const Real dt) {
   if (!(dt > 0)) throw std::invalid_argument(fmt::format("SolidSolver::advance: dt = {} must be positive", dt));
   return impl_->advance(t, dt);

@@ -62,6 +62,14 @@ Real p_wave_speed(const SolidMaterial& m, const SolidParameters& numerics);
 /// room for their stretch (contact, within dp, is shorter) [m]; the halo is this plus the skin.
 Real solid_interaction_radius(const SolidSetup& setup);
 
+/// Interface forces of a coupling: typed interface data, by global id, of each of this rank's owned solid
+/// particles (in the manner of a preCICE participant's read data): the external force on the particle [N per unit
+/// thickness in 2D, N in 3D].
+struct SolidLoadData {
+  std::vector<GlobalId> ids;  ///< this rank's owned solid particles, in local order
+  std::vector<Vec> force;     ///< one per id
+};
+
 class SolidSolver {
  public:
   /// Builds the bonds (reference configuration) and registers the solid's fields on `particles`:
@@ -90,6 +98,9 @@ class SolidSolver {
   Real damping_time() const;  ///< eta [s]
   /// One explicit step from t to t + dt (seed 004 eq. 25-48).
   SolidStepReport advance(Real t, Real dt);
+  /// A coupling's interface forces, held (in the field solid_load, which travels with the particles) until the
+  /// next call. Throws std::logic_error when the ids are not this rank's owned solid particles in local order.
+  void set_interface_load(const SolidLoadData& data);
   /// Called by the driver just before an output frame: refresh derived fields (stress, displacement,
   /// fragments) and append to fragments.csv when an output directory is set.
   void prepare_output(Real t);

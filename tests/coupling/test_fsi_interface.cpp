@@ -63,10 +63,10 @@ void set_hydrostatic(ParticleSet& p) {
   }
 }
 
-Vec total_force(const ParticleSet& p) {
+/// The sum of the interface forces the interface gives the solid.
+Vec total_force(const FsiInterface& fsi) {
   Vec f = Vec::Zero();
-  const auto& load = p.vector_field("solid_load");
-  for (std::size_t i = 0; i < p.size(); ++i) f += load[i];
+  for (const Vec& force : fsi.interface_load().force) f += force;
   return f;
 }
 
@@ -83,20 +83,24 @@ TEST(FsiInterface, HydrostaticForceOnAPlate) {
     fsi.initialize();
     fsi.prepare_fluid_boundary();
     fsi.compute_load();
-    const Vec f = total_force(p);
+    const Vec f = total_force(fsi);
     const Real expected = rho * g * h * h / 2;  // 49.05 N per m of width
     std::printf("  water %s: F = (%.3f, %.3f) N/m, expected |Fx| = %.3f N/m\n", left ? "left" : "right", f[0], f[1], expected);
     EXPECT_NEAR(f[0], left ? expected : -expected, 0.03 * expected) << "the water pushes the plate away from it";
     EXPECT_LT(std::abs(f[1]), 0.05 * expected);
     ASSERT_EQ(fsi.bodies().size(), 1U);
     EXPECT_NEAR(fsi.bodies()[0].force[0], f[0], 1e-9 * expected);
-    // Every wetted face particle carries about P dp, pushed away from the water.
-    const auto& load = p.vector_field("solid_load");
-    for (std::size_t i = 0; i < p.size(); ++i) {
+    // Every wetted face particle carries about P dp, pushed away from the water; the data are this rank's owned
+    // solid particles in local order.
+    const SolidLoadData load = fsi.interface_load();
+    ASSERT_EQ(load.ids, fsi.solid_ids());
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (p.kind[i] != ParticleKind::solid) continue;
+      const Vec& f_i = load.force[k++];
       const Real y = p.position[i][1];
-      if (p.kind[i] == ParticleKind::solid && load[i].squaredNorm() > 0 && y < h - 3 * dp && y > 3 * dp) {
-        EXPECT_NEAR(load[i][0], (left ? 1 : -1) * rho * g * (h - y) * dp, 0.03 * rho * g * h * dp);
-      }
+      if (f_i.squaredNorm() > 0 && y < h - 3 * dp && y > 3 * dp)
+        EXPECT_NEAR(f_i[0], (left ? 1 : -1) * rho * g * (h - y) * dp, 0.03 * rho * g * h * dp);
     }
   }
 }
@@ -113,7 +117,7 @@ TEST(FsiInterface, SeedNormalisationOverestimatesAFlatFace) {
   FsiInterface fsi(spec, p, opt);
   fsi.initialize();
   fsi.compute_load();
-  const Real ratio = total_force(p)[0] / (rho * g * h * h / 2);
+  const Real ratio = total_force(fsi)[0] / (rho * g * h * h / 2);
   std::printf("  seed normalisation: F / (rho g h^2 / 2) = %.3f\n", ratio);
   EXPECT_GT(ratio, 2.5);
 }
@@ -128,7 +132,7 @@ TEST(FsiInterface, NoFluidNoForce) {
   FsiInterface fsi(spec, p);
   fsi.initialize();
   fsi.compute_load();
-  EXPECT_EQ(total_force(p), Vec::Zero());
+  EXPECT_EQ(total_force(fsi), Vec::Zero());
   EXPECT_EQ(fsi.bodies()[0].n_wetted, 0U);
 }
 
@@ -276,4 +280,31 @@ TEST(FsiInterface, AFluidBuiltWithoutACoupledSolidRefusesItsView) {
   FsiInterface fsi(spec, p);
   fsi.initialize();
   EXPECT_THROW(fluid.set_solid_boundary(fsi.prepare_fluid_boundary()), std::logic_error);
+}
+
+TEST(FsiInterface, TheSolidTakesTheLoadAsTypedDataOfItsOwnParticles) {
+  const CaseSpec spec = plate_case(true, true);
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  SolidSolver solid(solid_setup(spec), p);
+  set_hydrostatic(p);
+  FsiInterface fsi(spec, p);
+  fsi.initialize();
+  fsi.compute_load();
+  SolidLoadData load = fsi.interface_load();
+  solid.set_interface_load(load);
+  const auto& held = p.vector_field(solid_fields::load);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (p.kind[i] == ParticleKind::solid) EXPECT_EQ(held[i], load.force[k++]);
+  SolidLoadData stale = load;
+  std::swap(stale.ids.front(), stale.ids.back());
+  EXPECT_THROW(solid.set_interface_load(stale), std::logic_error);
+  stale = load;
+  stale.ids.pop_back();
+  stale.force.pop_back();
+  EXPECT_THROW(solid.set_interface_load(stale), std::logic_error);
+  stale = load;
+  stale.force.pop_back();
+  EXPECT_THROW(solid.set_interface_load(stale), std::logic_error);
 }
