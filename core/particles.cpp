@@ -4,6 +4,8 @@
 #include "core/binary_io.hpp"
 #include "core/buffers.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cassert>
 #include <cstring>
@@ -337,6 +339,29 @@ void ParticleSet::load_state(BinaryReader& in) {
   n_ghost_ = 0;
   index_stale_ = true;
   next_id_ = global_id.empty() ? 0 : *std::max_element(global_id.begin(), global_id.end()) + 1;
+}
+
+std::vector<GlobalId> owned_ids(const ParticleSet& p, const ParticleKind k) {
+  std::vector<GlobalId> ids;
+  for (std::size_t i = 0; i < p.n_owned(); ++i)
+    if (p.kind[i] == k) ids.push_back(p.global_id[i]);
+  return ids;
+}
+
+std::vector<LocalIndex> owned_in_order(const ParticleSet& p, const ParticleKind k, const std::vector<GlobalId>& ids,
+                                       const char* who) {
+  std::vector<LocalIndex> at;
+  at.reserve(ids.size());
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.kind[i] != k) continue;
+    if (at.size() >= ids.size() || ids[at.size()] != p.global_id[i])
+      throw std::logic_error(fmt::format("{}: owned {} particle {} (global id {}) is not entry {} of the data", who,
+                                         to_string(k), i, p.global_id[i], at.size()));
+    at.push_back(static_cast<LocalIndex>(i));
+  }
+  if (at.size() != ids.size())
+    throw std::logic_error(fmt::format("{}: {} ids for {} owned {} particles", who, ids.size(), at.size(), to_string(k)));
+  return at;
 }
 
 }  // namespace mpsfsi

@@ -169,4 +169,13 @@ inline const std::vector<Angular>& angular_field(const ParticleSet& p, const std
 #endif
 }
 
+/// Global ids of the owned particles of kind k, in local order: how one module names the particles whose
+/// interface data it hands to another.
+std::vector<GlobalId> owned_ids(const ParticleSet& p, ParticleKind k);
+/// The local indices of the owned particles of kind k, checked against interface data keyed by `ids` (one
+/// entry per such particle, in local order); throws std::logic_error naming `who`, the particle and the entry
+/// otherwise.
+std::vector<LocalIndex> owned_in_order(const ParticleSet& p, ParticleKind k, const std::vector<GlobalId>& ids,
+                                       const char* who);
+
 }  // namespace mpsfsi

@@ -140,12 +140,7 @@ SolidBoundaryData FsiInterface::prepare_fluid_boundary(const Real dt, const Eige
   return view_solid(&at_mid_step);
 }
 
-std::vector<GlobalId> FsiInterface::solid_ids() const {
-  std::vector<GlobalId> ids;
-  for (std::size_t i = 0; i < p_.n_owned(); ++i)
-    if (p_.kind[i] == ParticleKind::solid) ids.push_back(p_.global_id[i]);
-  return ids;
-}
+std::vector<GlobalId> FsiInterface::solid_ids() const { return owned_ids(p_, ParticleKind::solid); }
 
 Eigen::VectorXd FsiInterface::predicted_displacement(const Real dt) const {
   const std::vector<GlobalId> ids = solid_ids();

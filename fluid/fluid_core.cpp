@@ -132,44 +132,28 @@ void FluidCore::set_solid_boundary(const SolidBoundaryData& data) {
                                        n_ids, data.surface.size(), data.position.size(), data.velocity.size(),
                                        data.reference_density.size()));
   if (solid_view_placed) throw std::logic_error("FluidSolver::set_solid_boundary: called within a step");
+  const std::vector<LocalIndex> at =
+      owned_in_order(p, ParticleKind::solid, data.ids, "FluidSolver::set_solid_boundary");
   auto& surface = p.scalar_field(solid_surface_field);
   auto& reference = p.scalar_field(solid_reference_field);
   auto& view_x = p.vector_field(solid_x_field);
   auto& view_v = p.vector_field(solid_v_field);
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p.n_owned(); ++i) {
-    if (p.kind[i] != ParticleKind::solid) continue;
-    if (k >= n_ids || data.ids[k] != p.global_id[i])
-      throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: owned solid particle {} (global id {}) is "
-                                         "not entry {} of the data", i, p.global_id[i], k));
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    const auto i = static_cast<std::size_t>(at[k]);
     surface[i] = data.surface[k] != 0 ? 1.0 : 0.0;
     reference[i] = data.density_offsets ? data.reference_density[k] : 0.0;
     view_x[i] = data.position[k];
     view_v[i] = data.velocity[k];
-    ++k;
   }
-  if (k != n_ids)
-    throw std::logic_error(fmt::format("FluidSolver::set_solid_boundary: {} ids for {} owned solid particles", n_ids, k));
   solid_boundary = true;
   solid_offsets = data.density_offsets;
   solid_view_new = true;
 }
 
-std::vector<std::string> FluidCore::solid_boundary_fields() const {
-  if (!solid_boundary) return {};
-  return {solid_surface_field};
-}
-
 double FluidCore::place_solid_view() {
   if (!solid_view_new) return 0;
   solid_view_new = false;
-  auto& view_x = p.vector_field(solid_x_field);
-  auto& view_v = p.vector_field(solid_v_field);
-  for (std::size_t i = 0; i < p.n_owned(); ++i)
-    if (p.kind[i] == ParticleKind::solid) {
-      std::swap(p.position[i], view_x[i]);
-      std::swap(p.velocity[i], view_v[i]);
-    }
+  swap_solid_view();
   solid_view_placed = true;
   if (!solid_offsets) return 0;
   // The solid's ghosts where the fluid sees them (the view travels with particles that change their rank); a
@@ -196,7 +180,12 @@ double FluidCore::place_solid_view() {
 
 void FluidCore::release_solid_view() {
   if (!solid_view_placed) return;
-  // The view's fields travelled with their particles if the step moved them to another rank.
+  swap_solid_view();
+  solid_view_placed = false;
+}
+
+void FluidCore::swap_solid_view() {
+  // The view's fields travel with their particles when a step moves them to another rank.
   auto& view_x = p.vector_field(solid_x_field);
   auto& view_v = p.vector_field(solid_v_field);
   for (std::size_t i = 0; i < p.n_owned(); ++i)
@@ -204,7 +193,6 @@ void FluidCore::release_solid_view() {
       std::swap(p.position[i], view_x[i]);
       std::swap(p.velocity[i], view_v[i]);
     }
-  solid_view_placed = false;
 }
 
 void FluidCore::classify() {

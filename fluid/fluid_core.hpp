@@ -59,14 +59,15 @@ struct FluidCore {
   /// Takes a coupled solid's view into the fields above (this rank's owned solid particles; see
   /// FluidSolver::set_solid_boundary).
   void set_solid_boundary(const SolidBoundaryData& data);
-  /// The fields of the coupled solid's view that ghosts need (empty when there is none).
-  std::vector<std::string> solid_boundary_fields() const;
   /// At the start of a step with a new view: the owned solid particles take the view's position and velocity
   /// (theirs are kept in its fields); with reference densities the solid ghosts are renewed and the density
   /// offsets taken where the fluid sees the solid. Returns the halo time [s].
   double place_solid_view();
-  /// At the end of the step: the owned solid particles get their own position and velocity back.
+  /// At the end of the step (or when it throws): the owned solid particles get their own position and velocity
+  /// back. Does nothing when no view is placed.
   void release_solid_view();
+  /// Exchanges the owned solid particles' position and velocity with the view's fields.
+  void swap_solid_view();
   /// roles of every particle (owned and ghosts) for this step.
   void classify();
   /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own

@@ -115,17 +115,22 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.dt = dt;
   auto t0 = Clock::now();
   const auto t_begin = t0;
+  report.t_halo += m.place_solid_view();  // a coupled solid's view for this step
+  // The solid's own state comes back at the end of the step, and also when the step throws.
+  struct ReleaseView {
+    fluid_detail::FluidCore& core;
+    ~ReleaseView() { core.release_solid_view(); }
+  } release_view{m};
+  t0 = Clock::now();
   // Owners and ghosts are renewed (with the cell order now and then) when a particle has moved half the
   // skin since they were built; in between, the ghosts' positions and velocities are refreshed.
-  report.t_halo += m.place_solid_view();  // a coupled solid's view for this step
-  t0 = Clock::now();
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
   const bool reorder = m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0;
   const bool rebuilt = m.dist.renew(m.p, {"position", "velocity"}, std::nullopt, reorder, [&] {
     if (reorder) m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
   });
   // A coupled solid's view was set on the owners: their ghosts get it here (a rebuild copied it already).
-  if (!rebuilt && m.solid_boundary) m.dist.exchange_ghosts(m.p, m.solid_boundary_fields(), ParticleKind::solid);
+  if (!rebuilt && m.solid_boundary) m.dist.exchange_ghosts(m.p, {fluid_detail::FluidCore::solid_surface_field}, ParticleKind::solid);
   report.t_halo += seconds_since(t0);
   t0 = Clock::now();
   m.classify();
@@ -220,7 +225,6 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.n_rows = counts[1];
   report.n_removed = counts[2];
   report.n_put_back = counts[3];
-  m.release_solid_view();
   ++m.n_steps;
   const double total = seconds_since(t_begin);
   report.t_rest = total - report.t_neighbours - report.t_assembly - report.t_setup - report.t_solve - report.t_halo;

@@ -989,17 +989,9 @@ void SolidSolver::set_interface_load(const SolidLoadData& data) {
   if (data.force.size() != data.ids.size())
     throw std::logic_error(fmt::format("SolidSolver::set_interface_load: {} ids and {} forces", data.ids.size(),
                                        data.force.size()));
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p.n_owned(); ++i) {
-    if (p.kind[i] != ParticleKind::solid) continue;
-    if (k >= data.ids.size() || data.ids[k] != p.global_id[i])
-      throw std::logic_error(fmt::format("SolidSolver::set_interface_load: owned solid particle {} (global id {}) is "
-                                         "not entry {} of the data", i, p.global_id[i], k));
-    load[i] = data.force[k++];
-  }
-  if (k != data.ids.size())
-    throw std::logic_error(fmt::format("SolidSolver::set_interface_load: {} ids for {} owned solid particles",
-                                       data.ids.size(), k));
+  const std::vector<LocalIndex> at =
+      owned_in_order(p, ParticleKind::solid, data.ids, "SolidSolver::set_interface_load");
+  for (std::size_t k = 0; k < at.size(); ++k) load[static_cast<std::size_t>(at[k])] = data.force[k];
 }
 
 SolidStepReport SolidSolver::advance(const Real t, const Real dt) {

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <set>
 
 using namespace mpsfsi;
@@ -70,17 +71,47 @@ Vec total_force(const FsiInterface& fsi) {
   return f;
 }
 
+/// A scene of plate_case with the plate's solid (which publishes the surface flag, eq. 48), a fluid solver when
+/// asked for (coupled: it takes its view of the solid from the interface), and the initialised interface.
+struct PlateInWater {
+  enum class Fluid { none, coupled, uncoupled };
+  CaseSpec spec;
+  Scene scene;
+  ParticleSet& p;
+  Distribution dist{MPI_COMM_SELF, {}};
+  std::unique_ptr<FluidSolver> fluid;
+  SolidSolver solid;
+  FsiInterface fsi;
+
+  explicit PlateInWater(const CaseSpec& case_spec, const Fluid with = Fluid::none, const FsiOptions& options = {})
+      : spec(case_spec),
+        scene(build_scene(spec)),
+        p(scene.particles),
+        fluid(with == Fluid::none ? nullptr
+                                  : std::make_unique<FluidSolver>(fluid_setup(spec), p, dist,
+                                                                  with == Fluid::coupled ? FsiInterface::fluid_options()
+                                                                                         : FluidOptions{})),
+        solid(solid_setup(spec), p),
+        fsi(spec, p, options) {
+    fsi.initialize();
+  }
+  /// Each owned solid particle's position and velocity by global id.
+  std::map<GlobalId, std::pair<Vec, Vec>> solid_state() const {
+    std::map<GlobalId, std::pair<Vec, Vec>> state;
+    for (std::size_t i = 0; i < p.n_owned(); ++i)
+      if (p.kind[i] == ParticleKind::solid) state[p.global_id[i]] = {p.position[i], p.velocity[i]};
+    return state;
+  }
+};
+
 }  // namespace
 
 TEST(FsiInterface, HydrostaticForceOnAPlate) {
   for (const bool left : {true, false}) {
-    const CaseSpec spec = plate_case(true, left);
-    Scene scene = build_scene(spec);
-    ParticleSet& p = scene.particles;
-    SolidSolver solid(solid_setup(spec), p);  // publishes the surface flag (eq. 48)
-    set_hydrostatic(p);
-    FsiInterface fsi(spec, p);
-    fsi.initialize();
+    PlateInWater s(plate_case(true, left));
+    const ParticleSet& p = s.p;
+    FsiInterface& fsi = s.fsi;
+    set_hydrostatic(s.p);
     fsi.prepare_fluid_boundary();
     fsi.compute_load();
     const Vec f = total_force(fsi);
@@ -99,51 +130,39 @@ TEST(FsiInterface, HydrostaticForceOnAPlate) {
       if (p.kind[i] != ParticleKind::solid) continue;
       const Vec& f_i = load.force[k++];
       const Real y = p.position[i][1];
-      if (f_i.squaredNorm() > 0 && y < h - 3 * dp && y > 3 * dp)
+      if (f_i.squaredNorm() > 0 && y < h - 3 * dp && y > 3 * dp) {
         EXPECT_NEAR(f_i[0], (left ? 1 : -1) * rho * g * (h - y) * dp, 0.03 * rho * g * h * dp);
+      }
     }
   }
 }
 
 TEST(FsiInterface, SeedNormalisationOverestimatesAFlatFace) {
   // Eq. 50 normalised by n~ of eq. 51 (fluid side only) gives n0 / n~ ~ 3 times the pressure force.
-  const CaseSpec spec = plate_case(true, true);
-  Scene scene = build_scene(spec);
-  ParticleSet& p = scene.particles;
-  SolidSolver solid(solid_setup(spec), p);
-  set_hydrostatic(p);
   FsiOptions opt;
   opt.normalisation = FsiOptions::Normalisation::seed;
-  FsiInterface fsi(spec, p, opt);
-  fsi.initialize();
-  fsi.compute_load();
-  const Real ratio = total_force(fsi)[0] / (rho * g * h * h / 2);
+  PlateInWater s(plate_case(true, true), PlateInWater::Fluid::none, opt);
+  set_hydrostatic(s.p);
+  s.fsi.compute_load();
+  const Real ratio = total_force(s.fsi)[0] / (rho * g * h * h / 2);
   std::printf("  seed normalisation: F / (rho g h^2 / 2) = %.3f\n", ratio);
   EXPECT_GT(ratio, 2.5);
 }
 
 TEST(FsiInterface, NoFluidNoForce) {
-  const CaseSpec spec = plate_case(false, true);
-  Scene scene = build_scene(spec);
-  ParticleSet& p = scene.particles;
-  SolidSolver solid(solid_setup(spec), p);
-  auto& pressure = p.add_scalar_field("pressure");
-  for (std::size_t i = 0; i < p.size(); ++i) pressure[i] = 1000;  // pressure alone does not load the plate
-  FsiInterface fsi(spec, p);
-  fsi.initialize();
-  fsi.compute_load();
-  EXPECT_EQ(total_force(fsi), Vec::Zero());
-  EXPECT_EQ(fsi.bodies()[0].n_wetted, 0U);
+  PlateInWater s(plate_case(false, true));
+  auto& pressure = s.p.add_scalar_field("pressure");
+  std::fill(pressure.begin(), pressure.end(), 1000.0);  // pressure alone does not load the plate
+  s.fsi.compute_load();
+  EXPECT_EQ(total_force(s.fsi), Vec::Zero());
+  EXPECT_EQ(s.fsi.bodies()[0].n_wetted, 0U);
 }
 
 TEST(FsiInterface, WorkOfTheLoadEqualsTheSolidsEnergyGain) {
-  const CaseSpec spec = plate_case(true, true, 0.0);  // no gravity on the solid: only the load works
-  Scene scene = build_scene(spec);
-  ParticleSet& p = scene.particles;
-  SolidSolver solid(solid_setup(spec), p);
-  set_hydrostatic(p);
-  FsiInterface fsi(spec, p);
-  fsi.initialize();
+  PlateInWater s(plate_case(true, true, 0.0));  // no gravity on the solid: only the load works
+  SolidSolver& solid = s.solid;
+  FsiInterface& fsi = s.fsi;
+  set_hydrostatic(s.p);
   fsi.compute_load();
   const Real e0 = solid.diagnostics().total();
   const Real dt_f = 2e-4;
@@ -167,14 +186,10 @@ TEST(FsiInterface, Subcycles) {
 }
 
 TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
-  const CaseSpec spec = plate_case(true, true);
-  Scene scene = build_scene(spec);
-  ParticleSet& p = scene.particles;
-  Distribution dist{MPI_COMM_SELF, {}};
-  FluidSolver fluid{fluid_setup(spec), p, dist, FsiInterface::fluid_options()};
-  SolidSolver solid(solid_setup(spec), p);
-  FsiInterface fsi(spec, p);
-  fsi.initialize();
+  PlateInWater s(plate_case(true, true), PlateInWater::Fluid::coupled);
+  const ParticleSet& p = s.p;
+  FluidSolver& fluid = *s.fluid;
+  FsiInterface& fsi = s.fsi;
   SolidBoundaryData data = fsi.prepare_fluid_boundary();
   // This rank's owned solid particles by global id, the solid's own surface flags, where it is (no step yet, so
   // no predictor) and its reference densities.
@@ -224,9 +239,7 @@ TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
     return sum / std::max(n, 1);
   };
   const Real p_at_rest = wetted_pressure();
-  std::map<GlobalId, std::pair<Vec, Vec>> before;
-  for (std::size_t i = 0; i < p.n_owned(); ++i)
-    if (p.kind[i] == ParticleKind::solid) before[p.global_id[i]] = {p.position[i], p.velocity[i]};
+  const auto before = s.solid_state();
   data = fsi.prepare_fluid_boundary();
   const Vec shift = Vec::UnitX() * 1e-3;
   for (std::size_t q = 0; q < data.ids.size(); ++q) {
@@ -240,11 +253,7 @@ TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
               p_pulled);
   EXPECT_GT(p_at_rest, 0.2 * rho * g * h);
   EXPECT_LT(p_pulled, 0.5 * p_at_rest);
-  for (std::size_t i = 0; i < p.n_owned(); ++i)
-    if (p.kind[i] == ParticleKind::solid) {
-      EXPECT_EQ(p.position[i], before[p.global_id[i]].first);
-      EXPECT_EQ(p.velocity[i], before[p.global_id[i]].second);
-    }
+  EXPECT_EQ(s.solid_state(), before);
   // The view is the data's, not the solid's field: every particle a dummy, no solid rows.
   data = fsi.prepare_fluid_boundary();
   std::fill(data.surface.begin(), data.surface.end(), 0);
@@ -271,32 +280,40 @@ TEST(FsiInterface, TheFluidSeesTheSolidThroughTypedInterfaceData) {
 }
 
 TEST(FsiInterface, AFluidBuiltWithoutACoupledSolidRefusesItsView) {
-  const CaseSpec spec = plate_case(true, true);
-  Scene scene = build_scene(spec);
-  ParticleSet& p = scene.particles;
-  Distribution dist{MPI_COMM_SELF, {}};
-  FluidSolver fluid{fluid_setup(spec), p, dist};
-  SolidSolver solid(solid_setup(spec), p);
-  FsiInterface fsi(spec, p);
-  fsi.initialize();
-  EXPECT_THROW(fluid.set_solid_boundary(fsi.prepare_fluid_boundary()), std::logic_error);
+  PlateInWater s(plate_case(true, true), PlateInWater::Fluid::uncoupled);
+  EXPECT_THROW(s.fluid->set_solid_boundary(s.fsi.prepare_fluid_boundary()), std::logic_error);
+}
+
+TEST(FsiInterface, AFluidStepThatThrowsGivesTheSolidItsOwnStateBack) {
+  // A dt so small that the pressure system overflows: the step stops with its diagnosis after the view was placed.
+  PlateInWater s(plate_case(true, true), PlateInWater::Fluid::coupled);
+  const auto own = s.solid_state();
+  SolidBoundaryData data = s.fsi.prepare_fluid_boundary();
+  for (Vec& x : data.position) x += Vec::UnitX() * 1e-3;
+  s.fluid->set_solid_boundary(data);
+  EXPECT_THROW(s.fluid->advance(0, 1e-200), std::runtime_error);
+  EXPECT_EQ(s.solid_state(), own);
+  // The view stays usable: a new one is taken and the next step runs.
+  s.fluid->set_solid_boundary(s.fsi.prepare_fluid_boundary());
+  EXPECT_NO_THROW(s.fluid->advance(0, 1e-4));
+  EXPECT_EQ(s.solid_state(), own);
 }
 
 TEST(FsiInterface, TheSolidTakesTheLoadAsTypedDataOfItsOwnParticles) {
-  const CaseSpec spec = plate_case(true, true);
-  Scene scene = build_scene(spec);
-  ParticleSet& p = scene.particles;
-  SolidSolver solid(solid_setup(spec), p);
-  set_hydrostatic(p);
-  FsiInterface fsi(spec, p);
-  fsi.initialize();
+  PlateInWater s(plate_case(true, true));
+  const ParticleSet& p = s.p;
+  SolidSolver& solid = s.solid;
+  FsiInterface& fsi = s.fsi;
+  set_hydrostatic(s.p);
   fsi.compute_load();
   SolidLoadData load = fsi.interface_load();
   solid.set_interface_load(load);
   const auto& held = p.vector_field(solid_fields::load);
   std::size_t k = 0;
   for (std::size_t i = 0; i < p.n_owned(); ++i)
-    if (p.kind[i] == ParticleKind::solid) EXPECT_EQ(held[i], load.force[k++]);
+    if (p.kind[i] == ParticleKind::solid) {
+      EXPECT_EQ(held[i], load.force[k++]);
+    }
   SolidLoadData stale = load;
   std::swap(stale.ids.front(), stale.ids.back());
   EXPECT_THROW(solid.set_interface_load(stale), std::logic_error);
