@@ -26,6 +26,8 @@ void CouplingScheme::load_state(BinaryReader& in) {
   if (got != name()) in.fail("the checkpoint's coupling scheme is " + got + ", this run's " + name());
 }
 
+std::array<Participant*, 2> CouplingParticipants::participants() const { return {&fluid, &solid}; }
+
 namespace {
 
 /// One coupled step: (a) the fluid's view of the solid (the mid-step prediction, or x + d with velocity d / dt
@@ -127,15 +129,14 @@ class ImplicitScheme : public CouplingScheme {
   }
 
   /// The state at the start of the window: this rank's particles (owned and ghosts, every array) with the ghost
-  /// plan, the solvers' iteration state and the interface's totals.
+  /// plan, the participants' iteration checkpoints and the interface's totals.
   void save() {
     saved_particles_ = c_.particles;
     saved_plan_ = c_.distribution.save_plan();
     BinaryWriter interface;
     c_.interface.save_state(interface);
     saved_interface_ = std::move(interface.bytes());
-    saved_fluid_ = c_.fluid.iteration_state();
-    saved_solid_ = c_.solid.iteration_state();
+    for (Participant* q : c_.participants()) q->store_iteration_checkpoint();
   }
   /// Back to the start of the window, bit for bit: the same particles in the same order on every rank.
   void restore() {
@@ -143,8 +144,7 @@ class ImplicitScheme : public CouplingScheme {
     c_.distribution.restore_plan(saved_plan_);
     BinaryReader interface(saved_interface_, "the coupled step's start");
     c_.interface.load_state(interface);
-    c_.fluid.restore(saved_fluid_);
-    c_.solid.restore(saved_solid_);
+    for (Participant* q : c_.participants()) q->reload_iteration_checkpoint();
   }
 
   ImplicitCouplingParameters parameters_;
@@ -153,8 +153,6 @@ class ImplicitScheme : public CouplingScheme {
   ParticleSet saved_particles_;
   std::shared_ptr<const Distribution::Plan> saved_plan_;
   std::string saved_interface_;
-  FluidSolver::IterationState saved_fluid_;
-  SolidSolver::IterationState saved_solid_;
 };
 
 }  // namespace

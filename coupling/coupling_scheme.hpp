@@ -20,6 +20,7 @@
 
 #include <mpi.h>
 
+#include <array>
 #include <memory>
 #include <string>
 
@@ -49,6 +50,8 @@ struct CouplingParticipants {
   FluidSolver& fluid;
   SolidSolver& solid;
   FsiInterface& interface;
+  /// The fluid and the solid behind the participant API, in that order.
+  std::array<Participant*, 2> participants() const;
 };
 
 class CouplingScheme {

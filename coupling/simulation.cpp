@@ -355,8 +355,7 @@ class RunLoop {
     save_run_state(w);
     all.save_state(w);
     w.bytes() += distribution.bytes();
-    if (fluid_) fluid_->save_state(w);
-    if (solid_) solid_->save_state(w);
+    for (const Participant* q : participants()) q->save_state(w);
     if (coupling_) coupling_->save_state(w);
     w.bytes() += scheme.bytes();
     w.section("end");
@@ -422,8 +421,7 @@ class RunLoop {
       p_.drop_ghosts();
       p_.load_state(in);  // every particle, on every rank
       dist_->load_state(in, p_);
-      if (fluid_) exact = fluid_->load_state(in);
-      if (solid_) solid_->load_state(in);
+      for (Participant* q : participants()) exact = q->load_state(in) && exact;
       if (coupling_) coupling_->load_state(in);
       if (scheme_) scheme_->load_state(in);
       in.expect_section("end");
@@ -448,6 +446,14 @@ class RunLoop {
 
   /// The partition weights of the first n particles: their work in a fluid step (fluid_work_weight; solid
   /// particles 1).
+  /// The run's participants (the fluid, the solid, or both in that order), as the checkpoint holds them.
+  std::vector<Participant*> participants() const {
+    std::vector<Participant*> all;
+    if (fluid_) all.push_back(fluid_.get());
+    if (solid_) all.push_back(solid_.get());
+    return all;
+  }
+
   std::vector<Real> work_weights(const std::size_t n) const {
     std::vector<Real> w(n);
     for (std::size_t i = 0; i < n; ++i) w[i] = fluid_work_weight(p_.kind[i]);

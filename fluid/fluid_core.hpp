@@ -132,6 +132,7 @@ struct FluidCore {
   std::string preconditioner;
   std::unique_ptr<PressureSolver> solver;
   std::size_t n_steps = 0;
+  std::size_t n_steps_stored = 0;  ///< n_steps at the last iteration checkpoint
   MPI_Comm comm = MPI_COMM_NULL;
   bool solid_boundary = false;  ///< a coupled solid has set its view (set_solid_boundary)
   bool solid_offsets = false;   ///< ... with density offsets

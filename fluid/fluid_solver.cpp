@@ -250,9 +250,9 @@ bool FluidSolver::load_state(BinaryReader& in) {
   return exact;
 }
 
-FluidSolver::IterationState FluidSolver::iteration_state() const { return {impl_->n_steps}; }
+void FluidSolver::store_iteration_checkpoint() { impl_->n_steps_stored = impl_->n_steps; }
 
-void FluidSolver::restore(const IterationState& state) { impl_->n_steps = state.n_steps; }
+void FluidSolver::reload_iteration_checkpoint() { impl_->n_steps = impl_->n_steps_stored; }
 
 void FluidSolver::set_density_tolerance_cap(const Real cap) {
   if (!(cap > 0)) throw std::invalid_argument("FluidSolver::set_density_tolerance_cap: a cap > 0 expected");

@@ -4,6 +4,7 @@
 // includes none of it. Its parameters live in fluid/fluid_parameters.hpp (FluidSetup); it sees no case file.
 #pragma once
 
+#include "core/participant.hpp"
 #include "core/particles.hpp"
 #include "fluid/pressure_solver.hpp"
 #include "core/kernel.hpp"
@@ -101,42 +102,39 @@ inline constexpr Real stiffness_number = 0.09;
 Real fluid_stable_dt(const TimeSpec& time, Real dp, Real nu, Real acceleration, Real v_max, Real viscous_number,
                      std::string* limit = nullptr);
 
-class FluidSolver {
+class FluidSolver : public Participant {
  public:
   /// Registers the fluid's fields (pressure, free_surface, ...) on `particles`, which hold this rank's
   /// particles as `distribution` places them. All ranks construct it and call every member together. io/ builds `setup` from a case (fluid_setup). Throws
   /// std::invalid_argument when the setup does not fit the particles (e.g. two fluid materials).
   FluidSolver(const FluidSetup& setup, ParticleSet& particles, Distribution& distribution,
               const FluidOptions& options = {});
-  ~FluidSolver();
+  ~FluidSolver() override;
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;
 
-  /// Largest admissible dt now (fluid_stable_dt for the fluid's largest speed and the gravity).
-  Real stable_dt(std::string* limit = nullptr) const;
+  /// Largest admissible dt now (fluid_stable_dt for the fluid's largest speed and the gravity); `limit` receives
+  /// the name of the limit that sets it.
+  Real stable_dt(std::string* limit) const;
+  Real stable_dt() const override { return stable_dt(nullptr); }
   /// One semi-implicit step (seed 004 eq. 16-24) from time t to t + dt.
   FluidStepReport advance(Real t, Real dt);
 
   /// Bytes held by the fluid's work arrays, neighbour list, matrix and preconditioner on this rank.
   std::size_t memory_bytes() const;
 
-  /// Checkpoints: what the fluid carries from step to step besides the particle arrays (the step count
+  /// Run checkpoints: what the fluid carries from step to step besides the particle arrays (the step count
   /// that times the cell reordering, the pressure solver's state). Everything else is rebuilt at every
   /// step or derived from the initial scene (the walls' reference positions), which a restarted run
-  /// rebuilds before it loads the state. All ranks call both.
-  void save_state(BinaryWriter& out) const;
-  /// Returns false when the coming steps cannot be bit for bit those of the original run (see
-  /// PressureSolver::load_state).
-  bool load_state(BinaryReader& in);
+  /// rebuilds before it loads the state. load_state returns false when the pressure solver's kept state
+  /// cannot be restored (PressureSolver::load_state).
+  void save_state(BinaryWriter& out) const override;
+  bool load_state(BinaryReader& in) override;
 
-  /// What a coupling iteration needs to repeat a step besides the particle arrays (which the caller keeps):
-  /// the step count (the first step is the start from rest). The pressure solver's state is left as it is: it
-  /// changes the iterations of a solve, not its answer beyond the tolerance.
-  struct IterationState {
-    std::size_t n_steps = 0;
-  };
-  IterationState iteration_state() const;
-  void restore(const IterationState& state);
+  /// An iteration checkpoint holds the step count (the first step is the start from rest). The pressure
+  /// solver's state is left as it is: it changes the iterations of a solve, not its answer beyond the tolerance.
+  void store_iteration_checkpoint() override;
+  void reload_iteration_checkpoint() override;
 
   /// The largest density error (RMS over the rows of r dt^2 / rho, as a fraction of n0) that the coming
   /// pressure solves may leave, below fluid.density_tolerance when that is tighter; +infinity: none. A

@@ -160,6 +160,7 @@ struct SolidSolver::Impl {
   std::vector<Rotation> clamp_rotation;      ///< ... its rotation there
   std::vector<MaterialConstants> mat;
   std::size_t n_broken = 0;  ///< bonds broken so far (all ranks)
+  std::size_t n_broken_stored = 0;  ///< n_broken at the last iteration checkpoint
 
   // Lattice offsets within re: bit slot of the bond to the particle at x0_i + dp * offset.
   int o_range = 0;
@@ -1011,16 +1012,17 @@ void SolidSolver::save_state(BinaryWriter& out) const {
   out.u64(impl_->n_broken);
 }
 
-void SolidSolver::load_state(BinaryReader& in) {
+bool SolidSolver::load_state(BinaryReader& in) {
   in.expect_section("solid");
   impl_->n_broken = in.u64("the broken-bond count");
   impl_->seen_gid.clear();  // the particle set was replaced: renew the structure at the next use
+  return true;
 }
 
-SolidSolver::IterationState SolidSolver::iteration_state() const { return {impl_->n_broken}; }
+void SolidSolver::store_iteration_checkpoint() { impl_->n_broken_stored = impl_->n_broken; }
 
-void SolidSolver::restore(const IterationState& state) {
-  impl_->n_broken = state.n_broken;
+void SolidSolver::reload_iteration_checkpoint() {
+  impl_->n_broken = impl_->n_broken_stored;
   impl_->seen_gid.clear();  // the particle arrays were put back: renew the structure at the next use
 }
 

@@ -16,6 +16,7 @@
 // Its parameters live in solid/solid_parameters.hpp (SolidSetup); it sees no case file.
 #pragma once
 
+#include "core/participant.hpp"
 #include "core/particles.hpp"
 #include "core/setup_error.hpp"
 #include "solid/solid_parameters.hpp"
@@ -70,7 +71,7 @@ struct SolidLoadData {
   std::vector<Vec> force;     ///< one per id
 };
 
-class SolidSolver {
+class SolidSolver : public Participant {
  public:
   /// Builds the bonds (reference configuration) and registers the solid's fields on `particles`:
   /// rotation, angular_velocity, displacement, von_mises, solid_pressure, fragment, surface, solid_load.
@@ -83,13 +84,13 @@ class SolidSolver {
   /// query below is a collective over the distribution's ranks with the result for the whole solid. The halo
   /// must cover solid_interaction_radius(setup).
   SolidSolver(const SolidSetup& setup, ParticleSet& particles, Distribution& distribution);
-  ~SolidSolver();
+  ~SolidSolver() override;
   SolidSolver(const SolidSolver&) = delete;
   SolidSolver& operator=(const SolidSolver&) = delete;
 
   /// Stable explicit time step of the solid: dt_factor * dp / c_p (c_p the largest P-wave speed,
   /// sqrt((lambda + 2 mu) / rho)); see docs/validation.md for the measured stability limit.
-  Real stable_dt() const;
+  Real stable_dt() const override;
   /// Kelvin-Voigt damping of the bonds: sigma = E (eps + eta d eps/dt) on the bonds' normal stretch, with
   /// the retardation time eta = beta dp / c_p. A mode of angular frequency omega gets the damping ratio
   /// eta omega / 2: beta = 0.5 gives ~0.5 at the particle scale (omega ~ 2 c_p / dp)
@@ -111,17 +112,15 @@ class SolidSolver {
   /// Checkpoints: the solid's state besides the particle arrays (the count of broken bonds). Everything the
   /// solid knows of a particle is in its particle arrays and fields (rotation, angular velocity, surface flag,
   /// and the internal fields "_solid_*": reference position, 1/n0, reference bond count, broken bonds), which
-  /// the checkpoint holds by global id; after load_state the solver renews its bonds from them.
-  void save_state(BinaryWriter& out) const;
-  void load_state(BinaryReader& in);
+  /// the checkpoint holds by global id; after load_state the solver renews its bonds from them. load_state
+  /// always returns true (the solid's steps continue bit for bit).
+  void save_state(BinaryWriter& out) const override;
+  bool load_state(BinaryReader& in) override;
 
-  /// What a coupling iteration needs to repeat a step besides the particle arrays (which the caller keeps and
-  /// puts back): the count of broken bonds. restore() renews the bonds from the particle arrays at the next use.
-  struct IterationState {
-    std::size_t n_broken = 0;
-  };
-  IterationState iteration_state() const;
-  void restore(const IterationState& state);
+  /// An iteration checkpoint holds the count of broken bonds; reloading it renews the bonds from the particle
+  /// arrays (which the caller puts back) at the next use.
+  void store_iteration_checkpoint() override;
+  void reload_iteration_checkpoint() override;
 
   SolidDiagnostics diagnostics() const;
   /// Number of fragments (connected components of intact bonds) at the last prepare_output or

@@ -84,13 +84,15 @@ int main(int argc, char** argv) {
     MPI_Allreduce(MPI_IN_PLACE, halo, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     const double ms = 1e3 / n_steps;
     {  // owned particles per rank at the end
-      unsigned long long mine[4] = {p.n_owned(), 0, 0, 0};
-      std::vector<unsigned long long> all(4 * static_cast<std::size_t>(n_ranks));
+      unsigned long long mine[6] = {p.n_owned(), 0, 0, 0, 0, 0};
+      std::vector<unsigned long long> all(6 * static_cast<std::size_t>(n_ranks));
       for (std::size_t i = 0; i < p.n_owned(); ++i) ++mine[1 + std::min(2, static_cast<int>(p.kind[i]))];
-      MPI_Gather(mine, 4, MPI_UNSIGNED_LONG_LONG, all.data(), 4, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+      for (const LocalIndex r : fluid.row_particles())  // the last step's pressure rows: fluid and wall particles
+        ++mine[p.kind[static_cast<std::size_t>(r)] == ParticleKind::fluid ? 4 : 5];
+      MPI_Gather(mine, 6, MPI_UNSIGNED_LONG_LONG, all.data(), 6, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
       for (std::size_t q = 0; rank == 0 && q < static_cast<std::size_t>(n_ranks); ++q)
-        fmt::print("rank {}: {} owned ({} fluid, {} wall, {} dummy)\n", q, all[4 * q], all[4 * q + 1], all[4 * q + 2],
-                   all[4 * q + 3]);
+        fmt::print("rank {}: {} owned ({} fluid, {} wall, {} dummy); pressure rows {} fluid, {} wall\n", q, all[6 * q],
+                   all[6 * q + 1], all[6 * q + 2], all[6 * q + 3], all[6 * q + 4], all[6 * q + 5]);
     }
     if (rank == 0) {
       fmt::print("dam break dp {} m, {} particles ({} fluid), {} rank(s), preconditioner {}, tolerance {:.0e}, {} steps to t = {:.4f} s\n",
