@@ -134,7 +134,7 @@ add_test(NAME run_all_shipped_cases
          COMMAND ${CMAKE_COMMAND} -DMODE=run -DMPSFSI=$<TARGET_FILE:mpsfsi> -DCASES_DIR=${PROJECT_SOURCE_DIR}/cases
                  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/case_runs -DSTEPS=20
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/cli/all_cases.cmake)
-set_tests_properties(run_all_shipped_cases PROPERTIES LABELS cases TIMEOUT 600)
+set_tests_properties(run_all_shipped_cases PROPERTIES LABELS cases TIMEOUT 600 COST 42)  # COST: see tests/fuzz
 
 # A run's outputs: disk full while frames are written (exit 4, complete frames only), progress lines flushed
 # to a pipe, fragments.csv only for breakable solids, empty option values refused.
