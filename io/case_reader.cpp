@@ -51,6 +51,10 @@ bool is_name(const std::string& s) {
   return std::all_of(s.begin(), s.end(), [](const unsigned char c) { return std::isalnum(c) || c == '_' || c == '-'; });
 }
 
+const std::string name_form = "a name of at most 64 letters, digits, '_' and '-' that starts with a letter or '_'";
+
+namespace {
+
 /// The position of the first byte of `s` that is not valid UTF-8 (a stray continuation byte, an overlong
 /// form, a surrogate or a code point above U+10FFFF, a truncated sequence), or npos: text that goes into
 /// case.resolved.yaml must stay readable by YAML readers.
@@ -84,8 +88,6 @@ std::size_t utf8_error(const std::string& s) {
   }
   return std::string::npos;
 }
-
-const std::string name_form = "a name of at most 64 letters, digits, '_' and '-' that starts with a letter or '_'";
 
 /// A decimal number: [+-]digits[.digits][e[+-]digits]. No hex, inf or nan; finite after conversion.
 std::optional<Real> parse_real(const std::string& s) {
@@ -122,6 +124,8 @@ std::optional<long long> parse_integer(const std::string& s) {
   if (value > 2147483647LL || value < -2147483647LL) return std::nullopt;
   return value;
 }
+
+}  // namespace
 
 /// Optimal-string-alignment distance, for "did you mean" hints.
 std::size_t edit_distance(const std::string& a, const std::string& b) {
@@ -322,10 +326,14 @@ std::string unique_name(MapReader& r, std::map<std::string, std::string>& names,
   return name;
 }
 
+namespace {
+
 /// A file named in the case: an absolute path, or relative to the case file's directory.
 fs::path resolve(const fs::path& base_dir, const std::string& file) {
   return fs::path(file).is_absolute() ? fs::path(file) : base_dir / file;
 }
+
+}  // namespace
 
 FileKey file_key(MapReader& r, const std::string& key, const fs::path& base_dir, const std::string& form) {
   const fs::path path = resolve(base_dir, r.text(key, form));

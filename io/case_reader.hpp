@@ -77,13 +77,6 @@ bool is_digits(const std::string& s);
 bool is_name(const std::string& s);
 /// What is_name accepts, for the messages.
 extern const std::string name_form;
-/// The position of the first byte of `s` that is not valid UTF-8, or npos: text that goes into
-/// case.resolved.yaml must stay readable by YAML readers.
-std::size_t utf8_error(const std::string& s);
-/// A decimal number: [+-]digits[.digits][e[+-]digits]. No hex, inf or nan; finite after conversion.
-std::optional<Real> parse_real(const std::string& s);
-/// A decimal integer: [+-]digits, within the range of int.
-std::optional<long long> parse_integer(const std::string& s);
 /// `typo` is close enough to `key` for a "did you mean" hint.
 bool looks_like(const std::string& typo, const std::string& key);
 
@@ -403,9 +396,6 @@ void check_time_step(MapReader& r, const std::string& key, Real dt, Real end);
 void check_interval(MapReader& r, const std::string& key, Real interval, bool given, Real end, const std::string& what);
 /// A name that must be unique within `names` (name -> path of its first use).
 std::string unique_name(MapReader& r, std::map<std::string, std::string>& names, const std::string& among);
-
-/// A file named in the case: an absolute path, or relative to the case file's directory.
-fs::path resolve(const fs::path& base_dir, const std::string& file);
 
 /// A file named in the case: its path as given (absolute, or relative to the case file's directory: what the
 /// messages show) and where the key is.
