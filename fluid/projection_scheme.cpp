@@ -92,7 +92,10 @@ class ProjectionScheme final : public PressureScheme {
     gram_ready = false;
   }
 
-  void assemble(const Real dt) override { assemble_projection(dt); }
+  void assemble(const Real dt) override {
+    step_dt = dt;
+    assemble_projection(dt);
+  }
 
   /// The pressure a free-surface row holds: 0, or with the projection the hydrostatic pressure at a fluid
   /// particle's centre, half a spacing below the surface, rho dp / 2 max(0, -g . n) with n the outward normal
@@ -506,11 +509,17 @@ class ProjectionScheme final : public PressureScheme {
   /// density the other rows' pressures do not bring down to n0 (w_i < 0, the particle would stay compressed)
   /// become rows again, with `additions` only (the later updates of one time step only remove rows: the set
   /// then shrinks and the iteration ends; a primal-dual active set can cycle when the matrix is not an
-  /// M-matrix, as this one is not). The pressures of the ghosts must be current. Whether any row changed on any rank.
+  /// M-matrix, as this one is not). A fluid particle's density after the step is the one the correction it
+  /// will be given makes (correction_velocities, capped), b_i + dt sum_j dn_i/dx_j . dv_j (surface_density_change):
+  /// the rows' operator measures it only where it is G, and its stabilisation counts the neighbours' pressure
+  /// as a flux into a free-surface particle that the force in fact pushes out (a flux that grows as
+  /// p dt^2 / (rho dp^2) against the particle's density shortfall). A wall or solid row keeps the test w < 0.
+  /// The pressures of the ghosts must be current. Whether any row changed on any rank.
   bool update_active_set(const bool additions) {
     auto& surface = p.scalar_field(fluid_fields::free_surface);
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
     const Real w_tolerance = 1e-9 * projection_source * n0_kernel;  // a relative density change of 1e-9
+    if (additions) correction_velocities(step_dt, near.n_particles(), trial_dv);
     int changed = 0;
     for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
@@ -522,6 +531,13 @@ class ProjectionScheme final : public PressureScheme {
         continue;
       }
       if (!additions || dry[i]) continue;
+      if (roles[i] == Role::fluid) {
+        if (row_error[r] + surface_density_change(i) > 1e-9 * n0_kernel) {
+          surface[i] = 0;
+          changed = 1;
+        }
+        continue;
+      }
       Real w = -projection_source * row_error[r];
       for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
         w += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
@@ -580,15 +596,26 @@ class ProjectionScheme final : public PressureScheme {
   /// sum_j p_j dn_j/dx_k); b_k = max(0, p_k - p_cap) caps the pressure the force's stiffness carries
   /// (stiffness_number in fluid/fluid_solver.hpp).
   void correct_projection(const Real dt) {
+    const std::size_t n = p.n_owned();
+    correction_velocities(dt, n, dv);
+    for (std::size_t k = 0; k < n; ++k) {
+      if (roles[k] != Role::fluid) continue;
+      p.velocity[k] += dv[k];
+      p.position[k] += dt * dv[k];
+    }
+  }
+
+  /// The correction's velocity change dv_k of correct_projection for the particles [0, n) of the near list
+  /// (0 for the ones that are not fluid), with the pressures as they are.
+  void correction_velocities(const Real dt, const std::size_t n, std::vector<Vec>& out) const {
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
     // The start from rest (the first step) carries its whole pressure: its force is the transpose of its
     // rows, so that p0 holds the water (at fine spacings p0 is far above p_cap at the first step's dt).
     const Real p_cap = initial_step() ? std::numeric_limits<Real>::infinity()
                                       : stiffness_number * rho * dp * dp / (dt * dt);
-    const std::size_t n = p.n_owned();
-    dv.resize(n);
+    out.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
-      dv[k].setZero();
+      out[k].setZero();
       if (roles[k] != Role::fluid) continue;
       Vec f = pressure[k] * geo.dn_self[k];
       const Real two_b = 2.0 * std::max(0.0, pressure[k] - p_cap);
@@ -597,13 +624,20 @@ class ProjectionScheme final : public PressureScheme {
         if (has_row(roles[j])) f += (pressure[j] - two_b) * geo.dn_pair[q];
         else if (geo.parent_of[j] >= 0) f += (pressure[static_cast<std::size_t>(geo.parent_of[j])] - two_b) * geo.dn_pair[q];
       }
-      dv[k] = -dt / rho * geo.projection_scale * f;
+      out[k] = -dt / rho * geo.projection_scale * f;
     }
-    for (std::size_t k = 0; k < n; ++k) {
-      if (roles[k] != Role::fluid) continue;
-      p.velocity[k] += dv[k];
-      p.position[k] += dt * dv[k];
+  }
+
+  /// The change of fluid particle i's number density that the correction with the velocity changes trial_dv
+  /// makes, to first order: dt (dn_i/dx_i . dv_i + sum_j dn_i/dx_j . dv_j) over its fluid neighbours j, with
+  /// dn_i/dx_j = -dn_j/dx_i (entry q of row i).
+  Real surface_density_change(const std::size_t i) const {
+    Real change = geo.dn_self[i].dot(trial_dv[i]);
+    for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
+      const auto j = static_cast<std::size_t>(near.index[q]);
+      if (roles[j] == Role::fluid) change -= geo.dn_pair[q].dot(trial_dv[j]);
     }
+    return step_dt * change;
   }
 
   /// The projection: surface_value of every particle in the near list (owned and ghosts). A particle whose
@@ -656,6 +690,8 @@ class ProjectionScheme final : public PressureScheme {
   Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
   Real row_compress = 0;          ///< the compressibility 1 / (c^2 dt^2) of the step's rows (assemble_projection)
+  Real step_dt = 0;               ///< the step's dt (assemble)
+  std::vector<Vec> trial_dv;      ///< the correction's velocity change at the current pressures (update_active_set)
 
   Geometry geo;                          ///< projection: the geometry of this step's rows and correction
   std::vector<Real> initial_error;       ///< projection, first step: each row's density error at the start

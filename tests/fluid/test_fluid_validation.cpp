@@ -281,12 +281,10 @@ FrontErrors run_dam_break_front() {
 }
 }  // namespace
 
-// Acceptance criterion of issue 3 not met yet (docs/validation.md, ## Fluid): the front runs ahead of the
-// experiment by up to 24 % at T = 3 (+9..10 % at T = 1.5). Resolution-converged (dp 4, 3, 2 mm: +23.6, +23.5,
-// +23.9 %) and insensitive to c, kappa, dt; not a spray artefact (the 10th particle from the front is only
-// ~3 % behind the first). Its speed is right: delayed by a constant 0.2-0.3 in T the front lies within
-// 4 % of Martin & Moyce's own series (cases/dam_break/analyse.py). Disabled so that it shows as "disabled"
-// in ctest.
+// Acceptance criterion of issue 3 not met yet: the front runs ahead of the experiment's table, converged in dp
+// and insensitive to c, kappa and dt; its speed is right, and delayed by a constant in T it lies on Martin &
+// Moyce's own series (docs/validation.md, "Dam break: surge front" and "a start-up delay"). Disabled so that it
+// shows as "disabled" in ctest.
 TEST(FluidValidation, DISABLED_DamBreakSurgeFront) {
   const FrontErrors e = run_dam_break_front();
   EXPECT_GT(e.n_compared, 50);
