@@ -187,7 +187,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   // The projection's active set: re-solved while rows change (at most max_solves solves), on the same rows.
   for (int solves = 1; solves < m.scheme->max_solves(); ++solves) {
     m.refresh_ghosts({fluid_fields::pressure}, report);
-    if (!m.scheme->update_rows(solves)) break;
+    if (!m.scheme->update_rows(solves, dt)) break;
     m.refresh_ghosts({fluid_fields::free_surface}, report);
     t0 = Clock::now();
     m.scheme->assemble(dt);

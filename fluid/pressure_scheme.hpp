@@ -36,7 +36,7 @@ class PressureScheme {
   /// Pressure solves of one step at most (an active set re-solves while its rows change).
   virtual int max_solves() const { return 1; }
   /// Updates the rows after a solve (the ghosts' pressures current); whether any changed on any rank.
-  virtual bool update_rows(int /*solves*/) { return false; }
+  virtual bool update_rows(int /*solves*/, Real /*dt*/) { return false; }
   /// After the last solve, the pressures current at the ghosts.
   virtual void after_solve(Real /*dt*/) {}
   /// The pressure's correction of the fluid particles' velocities and positions.

@@ -92,10 +92,7 @@ class ProjectionScheme final : public PressureScheme {
     gram_ready = false;
   }
 
-  void assemble(const Real dt) override {
-    step_dt = dt;
-    assemble_projection(dt);
-  }
+  void assemble(const Real dt) override { assemble_projection(dt); }
 
   /// The pressure a free-surface row holds: 0, or with the projection the hydrostatic pressure at a fluid
   /// particle's centre, half a spacing below the surface, rho dp / 2 max(0, -g . n) with n the outward normal
@@ -105,7 +102,7 @@ class ProjectionScheme final : public PressureScheme {
   int max_solves() const override { return max_active_set_solves; }
 
   // Rows come back in the first two updates only.
-  bool update_rows(const int solves) override { return update_active_set(solves <= 2); }
+  bool update_rows(const int solves, const Real dt) override { return update_active_set(solves <= 2, dt); }
 
   void after_solve(const Real dt) override {
     if (initial_step()) start_from_rest(dt);
@@ -244,18 +241,26 @@ class ProjectionScheme final : public PressureScheme {
     return -1;
   }
 
-  /// The first step's change of particle i's number density to first order in the displacements d since the
-  /// start (start_position): sum_j dw(r_ij)/dx_i . (d_i - d_j) over its neighbours (the fluid ones only for
-  /// `fluid_only`, a wall or solid row, whose other neighbours count at their reference).
-  Real linear_change(const std::size_t i, const bool fluid_only) const {
-    assert(geo.all_derivatives);
-    const Vec d_i = p.position[i] - start_position[i];
+  /// The change of particle i's number density to first order in the displacements d(j) of the particles:
+  /// sum_j dw(r_ij)/dx_i . (d_i - d_j) over its neighbours (the fluid ones only for `fluid_only`, a wall or
+  /// solid row, whose other neighbours count at their reference). Needs row i's derivatives (a fluid
+  /// particle's, or all_derivatives).
+  template <class Displacement>
+  Real density_change(const std::size_t i, const bool fluid_only, const Displacement& d) const {
+    assert(geo.all_derivatives || roles[i] == Role::fluid);
+    const Vec d_i = d(i);
     Real change = 0;
     for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
       const auto j = static_cast<std::size_t>(near.index[q]);
-      if (!fluid_only || roles[j] == Role::fluid) change += geo.dn_pair[q].dot(d_i - (p.position[j] - start_position[j]));
+      if (!fluid_only || roles[j] == Role::fluid) change += geo.dn_pair[q].dot(d_i - d(j));
     }
     return change;
+  }
+
+  /// The first step's density_change of particle i for the displacements since the start (start_position).
+  Real linear_change(const std::size_t i, const bool fluid_only) const {
+    assert(geo.all_derivatives);
+    return density_change(i, fluid_only, [&](const std::size_t j) { return Vec(p.position[j] - start_position[j]); });
   }
 
   /// The projection's operator over this rank's rows (every row particle, whatever its free-surface flag),
@@ -510,16 +515,16 @@ class ProjectionScheme final : public PressureScheme {
   /// become rows again, with `additions` only (the later updates of one time step only remove rows: the set
   /// then shrinks and the iteration ends; a primal-dual active set can cycle when the matrix is not an
   /// M-matrix, as this one is not). A fluid particle's density after the step is the one the correction it
-  /// will be given makes (correction_velocities, capped), b_i + dt sum_j dn_i/dx_j . dv_j (surface_density_change):
+  /// will be given makes (correction_velocities, capped), b_i + dt sum_j dn_i/dx_j . dv_j (density_change):
   /// the rows' operator measures it only where it is G, and its stabilisation counts the neighbours' pressure
   /// as a flux into a free-surface particle that the force in fact pushes out (a flux that grows as
   /// p dt^2 / (rho dp^2) against the particle's density shortfall). A wall or solid row keeps the test w < 0.
   /// The pressures of the ghosts must be current. Whether any row changed on any rank.
-  bool update_active_set(const bool additions) {
+  bool update_active_set(const bool additions, const Real dt) {
     auto& surface = p.scalar_field(fluid_fields::free_surface);
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
     const Real w_tolerance = 1e-9 * projection_source * n0_kernel;  // a relative density change of 1e-9
-    if (additions) correction_velocities(step_dt, near.n_particles(), trial_dv);
+    if (additions) correction_velocities(dt, near.n_particles(), trial_dv);
     int changed = 0;
     for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
@@ -532,7 +537,8 @@ class ProjectionScheme final : public PressureScheme {
       }
       if (!additions || dry[i]) continue;
       if (roles[i] == Role::fluid) {
-        if (row_error[r] + surface_density_change(i) > 1e-9 * n0_kernel) {
+        if (row_error[r] + dt * density_change(i, false, [&](const std::size_t j) { return trial_dv[j]; }) >
+            1e-9 * n0_kernel) {
           surface[i] = 0;
           changed = 1;
         }
@@ -628,18 +634,6 @@ class ProjectionScheme final : public PressureScheme {
     }
   }
 
-  /// The change of fluid particle i's number density that the correction with the velocity changes trial_dv
-  /// makes, to first order: dt (dn_i/dx_i . dv_i + sum_j dn_i/dx_j . dv_j) over its fluid neighbours j, with
-  /// dn_i/dx_j = -dn_j/dx_i (entry q of row i).
-  Real surface_density_change(const std::size_t i) const {
-    Real change = geo.dn_self[i].dot(trial_dv[i]);
-    for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
-      const auto j = static_cast<std::size_t>(near.index[q]);
-      if (roles[j] == Role::fluid) change -= geo.dn_pair[q].dot(trial_dv[j]);
-    }
-    return step_dt * change;
-  }
-
   /// The projection: surface_value of every particle in the near list (owned and ghosts). A particle whose
   /// neighbours balance (|dn_k/dx_k| at round-off, inside a regular arrangement) has no normal: 0.
   void surface_pressures() {
@@ -690,7 +684,6 @@ class ProjectionScheme final : public PressureScheme {
   Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
   Real row_compress = 0;          ///< the compressibility 1 / (c^2 dt^2) of the step's rows (assemble_projection)
-  Real step_dt = 0;               ///< the step's dt (assemble)
   std::vector<Vec> trial_dv;      ///< the correction's velocity change at the current pressures (update_active_set)
 
   Geometry geo;                          ///< projection: the geometry of this step's rows and correction
