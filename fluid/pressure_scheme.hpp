@@ -20,8 +20,9 @@ class PressureScheme {
   virtual Real near_radius() const = 0;
   /// Whether the ghosts need their neighbours too (the projection's rows reach two kernel radii).
   virtual bool ghosts_need_neighbours() const = 0;
-  /// After the neighbour search, before the prediction (the projection's references in its first step).
-  virtual void before_predict(FluidStepReport&) {}
+  /// The first step only, before the walls move in it: the initial state (the projection's references and
+  /// start positions), with the neighbour list of that state.
+  virtual void initial_state(FluidStepReport&) {}
   /// Whether a particle flagged free-surface in the last step stays flagged (the active set's warm start).
   virtual bool keeps_surface() const { return false; }
   /// After the free-surface check, before its flags are refreshed at the ghosts.

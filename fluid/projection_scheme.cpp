@@ -59,8 +59,7 @@ class ProjectionScheme final : public PressureScheme {
   // The ghosts' rows too: their dn/dx enter the pressure rows of their neighbours.
   bool ghosts_need_neighbours() const override { return true; }
 
-  void before_predict(FluidStepReport& report) override {
-    if (n_steps != 0) return;
+  void initial_state(FluidStepReport& report) override {
     reference_densities();
     core.refresh_ghosts({reference_density_field}, report);
     start_position = p.position;  // owned and ghosts: the first step's displacements (build_gram)
@@ -257,10 +256,16 @@ class ProjectionScheme final : public PressureScheme {
     return change;
   }
 
-  /// The first step's density_change of particle i for the displacements since the start (start_position).
+  /// The first step's density_change of particle i for the fluid's displacements since the start
+  /// (start_position). The walls and solids count at their start: p0 is the pressure of the water at rest
+  /// against its boundaries, and a boundary that moves in the first step (a tank that starts rolling, a wall
+  /// table whose first value is not the start) would put that motion's impulse into p0, which the rest offsets
+  /// then hold for the whole run; the later steps' rows see the boundary's motion as they see it at any step.
   Real linear_change(const std::size_t i, const bool fluid_only) const {
     assert(geo.all_derivatives);
-    return density_change(i, fluid_only, [&](const std::size_t j) { return Vec(p.position[j] - start_position[j]); });
+    return density_change(i, fluid_only, [&](const std::size_t j) {
+      return roles[j] == Role::fluid ? Vec(p.position[j] - start_position[j]) : Vec(Vec::Zero());
+    });
   }
 
   /// The projection's operator over this rank's rows (every row particle, whatever its free-surface flag),
@@ -574,9 +579,13 @@ class ProjectionScheme final : public PressureScheme {
     linear_source = false;
     // The offsets on the geometry of the moved positions, which the next step's rows see; the correction of
     // this step on the geometry of its rows (the start's), kept aside meanwhile.
+    // The walls and solids at their start, as in the first step's rows (linear_change).
     Geometry start;
     std::swap(geo, start);
-    projection_geometry(p.position);
+    std::vector<Vec> rest_position = p.position;
+    for (std::size_t j = 0; j < rest_position.size(); ++j)
+      if (roles[j] != Role::fluid) rest_position[j] = start_position[j];
+    projection_geometry(rest_position);
     build_gram(dt);  // G' of the later steps (the offsets are still 0: row_error is b)
     auto& rest_offset = p.scalar_field(rest_offset_field);
     auto& rest_rate = p.scalar_field(rest_rate_field);

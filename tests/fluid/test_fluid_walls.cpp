@@ -52,13 +52,17 @@ Thrown throw_into_corner(const std::string& scheme, const Real speed, const int 
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   const TankMotion motion = make_tank_motion(spec.tank_motion);
-  // The walls are placed by the solver's first step; the water is placed here.
-  const Vec towards_corner = motion.place(Vec::Constant(-1.0), tilt) - motion.place(Vec::Zero(), tilt);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.kind[i] != ParticleKind::fluid) continue;
-    p.position[i] = motion.place(p.position[i], tilt);
-    p.velocity[i] = speed * towards_corner.normalized();
+  // The tank stands tilted from the start: every particle turned, the walls' untilted positions kept as the
+  // references their motion turns (the field a run's walls keep, "wall_reference"), so that the first step
+  // starts from the tilted tank, as a run starts from its case's geometry.
+  if (tilt != 0) {
+    auto& reference = p.add_vector_field("wall_reference");
+    for (std::size_t i = 0; i < p.size(); ++i) reference[i] = p.position[i];
+    for (std::size_t i = 0; i < p.size(); ++i) p.position[i] = motion.place(p.position[i], tilt);
   }
+  const Vec towards_corner = motion.place(Vec::Constant(-1.0), tilt) - motion.place(Vec::Zero(), tilt);
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.kind[i] == ParticleKind::fluid) p.velocity[i] = speed * towards_corner.normalized();
   Distribution dist{MPI_COMM_SELF, {}};
   FluidSolver fluid{fluid_setup(spec), p, dist};
   const Rect inner = spec.walls.at(0).rect;
