@@ -577,9 +577,9 @@ class ProjectionScheme final : public PressureScheme {
   void start_from_rest(const Real dt) {
     step_alpha = stabilisation;
     linear_source = false;
-    // The offsets on the geometry of the moved positions, which the next step's rows see; the correction of
-    // this step on the geometry of its rows (the start's), kept aside meanwhile.
-    // The walls and solids at their start, as in the first step's rows (linear_change).
+    // The offsets on the geometry of the moved fluid positions, which the next step's rows see, with the walls
+    // and solids at their start as in the first step's rows (linear_change); the correction of this step on the
+    // geometry of its rows (the start's), kept aside meanwhile.
     Geometry start;
     std::swap(geo, start);
     std::vector<Vec> rest_position = p.position;
