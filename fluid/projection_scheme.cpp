@@ -340,12 +340,8 @@ class ProjectionScheme final : public PressureScheme {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (linear_source) {
         // The first solve: the error at the start plus the step's displacements' change to first order, the
-        // change that the correction's G undoes. An excess at the start is the arrangement's rest density (as
-        // the rest offsets make it for the later steps), not an error to remove in one step: removing it would
-        // take an impulse p ~ 1/dt^2 (particles of two bodies filled closer than dp, a solid's clamp in a
-        // wall). A shortfall stays, so that the free surface is found by the active set. (An excess at
-        // round-off, start_excess, is left as it is.)
-        row_error[r] = std::min(initial_error[i], start_excess * n0_kernel) + linear_change(i, roles[i] != Role::fluid);
+        // change that the correction's G undoes.
+        row_error[r] = initial_error[i] + linear_change(i, roles[i] != Role::fluid);
         for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e)
           row_error[r] += linear_change(static_cast<std::size_t>(members[e]), false);
         continue;
@@ -690,9 +686,6 @@ class ProjectionScheme final : public PressureScheme {
   static constexpr Real start_alpha = 0.1;
   /// The first step's compressibility, as a share of the case's 1 / c^2: nearly incompressible.
   static constexpr Real start_compressibility = 1e-4;
-  /// The largest density excess at the start, relative to n0, that the first step's rows remove (round-off;
-  /// build_gram): a larger one is the arrangement's rest density.
-  static constexpr Real start_excess = 1e-9;
   int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
   Real stabilisation = 0;         ///< alpha of fluid.projection_stabilisation
   DensityKernel kernel = DensityKernel::wendland;  ///< fluid.projection_kernel
