@@ -7,7 +7,6 @@
 #include "app/commands.hpp"
 #include "app/dimension_launch.hpp"
 #include "core/files.hpp"
-#include "core/mpi_start.hpp"
 #include "core/version.hpp"
 #include "io/case.hpp"
 
@@ -25,7 +24,7 @@
 namespace {
 /// MPI for the whole program; finalized on every return path.
 struct MpiSession {
-  MpiSession(int* argc, char*** argv) { mpsfsi::start_mpi(argc, argv); }
+  MpiSession(int* argc, char*** argv) { MPI_Init(argc, argv); }
   ~MpiSession() { MPI_Finalize(); }
 };
 

@@ -5,7 +5,6 @@
 // memory per rank and per particle; ghosts and halo bytes.
 // Usage: [mpirun -np R] bench_fluid_dam_break [preconditioner [n_steps [dp [extra --set overrides...]]]]
 // Results go to docs/performance.md (## Fluid).
-#include "core/mpi_start.hpp"
 #include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
@@ -21,7 +20,7 @@
 using namespace mpsfsi;
 
 int main(int argc, char** argv) {
-  start_mpi(&argc, &argv);
+  MPI_Init(&argc, &argv);
   {
     int rank = 0, n_ranks = 1;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);

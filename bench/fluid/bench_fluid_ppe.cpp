@@ -12,7 +12,6 @@
 //   the preconditioner (PressureSolverSettings::parameters, MueLu / Ifpack2 names; ' ' may be written '_' in keys and values).
 // Example: bench_fluid_ppe 100 0.0016 jac:jacobi sgs:sgs mu5:muelu:rebuild_every=5
 // Results go to docs/performance.md (## Fluid, ### Pressure solve).
-#include "core/mpi_start.hpp"
 #include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "fluid/pressure_solver.hpp"
@@ -100,7 +99,7 @@ Variant parse_variant(const std::string& text, const CaseSpec& spec) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  start_mpi(&argc, &argv);
+  MPI_Init(&argc, &argv);
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);

@@ -4,7 +4,6 @@
 // against a hand-written CG on the same Tpetra objects, all run for a fixed number of iterations, to
 // split the cost of one CG iteration into SpMV, vector operations and Belos overhead.
 // Usage: bench_fluid_spmv [n_steps [dp]]. Results go to docs/performance.md (## Fluid, ### Pressure solve).
-#include "core/mpi_start.hpp"
 #include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
@@ -50,7 +49,7 @@ double time_ms(const int reps, const std::function<void()>& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  start_mpi(&argc, &argv);
+  MPI_Init(&argc, &argv);
   Kokkos::initialize();
   {
     const int n_steps = argc > 1 ? std::stoi(argv[1]) : 20;

@@ -2,7 +2,6 @@
 // all ranks of MPI_COMM_WORLD (core/distribution.hpp) must give, particle by particle (matched by global id),
 // the pressures and positions of a one-rank run (MPI_COMM_SELF) to solver tolerance, keep every particle
 // owned exactly once, and reach the true residual of the tolerance in every distributed solve.
-#include "core/mpi_start.hpp"
 #include "core/distribution.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
@@ -17,7 +16,7 @@
 using namespace mpsfsi;
 
 int main(int argc, char** argv) {
-  start_mpi(&argc, &argv);
+  MPI_Init(&argc, &argv);
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
