@@ -16,6 +16,7 @@ n1=${3:-2}
 n2=${4:-4}
 command -v valgrind > /dev/null || { echo "scaling_instructions.sh: valgrind is not installed" >&2; exit 2; }
 bench="$build/bench/fluid/bench_fluid_dam_break"
+cmake --build "$build" --target bench_fluid_dam_break >/dev/null  # not in the default build
 mpi="mpirun --allow-run-as-root --oversubscribe -np"
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT

@@ -12,6 +12,7 @@ n1=${3:-20}
 n2=${4:-40}
 command -v valgrind > /dev/null || { echo "scheme_instructions.sh: valgrind is not installed" >&2; exit 2; }
 bench="$build/bench/fluid/bench_fluid_dam_break"
+cmake --build "$build" --target bench_fluid_dam_break >/dev/null  # not in the default build
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 count() {  # scheme steps: the program's instructions
