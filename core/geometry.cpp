@@ -53,6 +53,27 @@ int lattice_cells(const Real length, const Real dp) {
   return std::max(1, static_cast<int>(n));
 }
 
+Rect lattice_rect(const Vec& lo, const Vec& hi, const Vec& origin, const Real dp) {
+  lattice_cells(1, dp);  // checks dp
+  const Real tol = 1e-9;
+  Rect r;
+  for (int a = 0; a < dim; ++a) {
+    if (!(hi[a] > lo[a])) throw std::invalid_argument("lattice: rectangle side must be positive");
+    // Cell k has the centre origin + (k + 1/2) dp; the first with a centre above lo, the last with one at or below hi.
+    const double f_lo = (lo[a] - origin[a]) / dp, f_hi = (hi[a] - origin[a]) / dp;
+    const double first = std::floor(f_lo - 0.5 + tol) + 1, last = std::floor(f_hi - 0.5 + tol);
+    if (std::abs(f_lo) > 1e8 || std::abs(f_hi) > 1e8) throw std::invalid_argument("lattice: too many particles along one side");
+    if (last < first) {
+      r.lo[a] = lo[a];
+      r.hi[a] = lo[a] + dp;
+      continue;
+    }
+    r.lo[a] = std::abs(f_lo - std::round(f_lo)) < tol ? lo[a] : origin[a] + first * dp;
+    r.hi[a] = r.lo[a] + (last - first + 1) * dp;
+  }
+  return r;
+}
+
 std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, const Real dp) {
   const IVec n = cells_of(lo, hi, dp);
   std::vector<Vec> x;

@@ -2,8 +2,8 @@
 // (boxes in 3D), spheres and cylinders; box walls, and blocks, spheres and cylinders made of one wall layer plus
 // dummy layers (seed 004 §4.3), and any region given by its signed distance (a surface read from a file: io/surface.hpp)
 // filled, or made into walls, on the same lattice. A rectangle of n x m (x l) cells of side dp gets one particle at the centre of
-// each cell, so bodies that touch along a face sit exactly dp apart and never overlap. "Rectangle" below means the axis-aligned
-// box [lo, hi] in the build's dimension.
+// each cell. The rectangles of a scene are first put on one lattice (lattice_rect), so bodies that touch along a face sit
+// exactly dp apart at any dp and never overlap. "Rectangle" below means the axis-aligned box [lo, hi] in the build's dimension.
 #pragma once
 
 #include "core/types.hpp"
@@ -29,6 +29,13 @@ inline bool overlaps(const Rect& a, const Rect& b) {
 /// Number of lattice cells that fit a length: round(length / dp), at least 1. Throws
 /// std::invalid_argument when length or dp is not positive.
 int lattice_cells(Real length, Real dp);
+
+/// The rectangle of the cells of the lattice with faces at origin + k dp (k whole) whose centres c satisfy
+/// lo < c <= hi on every axis: a centre on the face between two touching rectangles belongs to the lower one, so
+/// touching rectangles share no cell and leave none out between them, whatever dp. Its lo is `lo` itself where `lo`
+/// is on the lattice (to 1e-9 dp), and its sides are whole cells. An axis that holds no such centre (a side shorter
+/// than dp) keeps one cell from lo, as fill_rectangle does. Throws as lattice_cells.
+Rect lattice_rect(const Vec& lo, const Vec& hi, const Vec& origin, Real dp);
 
 /// Particle centres filling the rectangle [lo, hi]: lo + (i + 1/2, j + 1/2 [, k + 1/2]) dp for
 /// i < lattice_cells(hi_x - lo_x), j < lattice_cells(hi_y - lo_y) [, k < ...], row by row (x fastest,

@@ -44,11 +44,31 @@ SignedDistance wall_distance(const WallSpec& w) {
   return box_distance(w.rect.lo, w.rect.hi);
 }
 
+/// Whether a point of a solid body is in its clamp (a point on the clamp's face to round-off, its centre
+/// lo + (i + 1/2) dp, is in).
+bool in_clamp(const CaseSpec& spec, const BodySpec& b, const Vec& x) {
+  if (!b.clamp) return false;
+  return Rect{b.clamp->lo.array() - 1e-9 * spec.dp, b.clamp->hi.array() + 1e-9 * spec.dp}.contains(x);
+}
+
+/// The corner of the case's lattice (core/geometry.hpp, lattice_rect): the first box wall's (the tank's) low corner,
+/// else the first rectangle body's, else the origin. Rectangle bodies, box walls and block walls are put on it.
+Vec lattice_origin(const CaseSpec& spec) {
+  for (const auto& w : spec.walls)
+    if (w.type == WallType::box) return w.rect.lo;
+  for (const auto& b : spec.bodies)
+    if (!b.surface && !b.round) return b.rect.lo;
+  return Vec::Zero();
+}
+
+/// A rectangle of the case on its lattice.
+Rect on_lattice(const CaseSpec& spec, const Rect& r) { return lattice_rect(r.lo, r.hi, lattice_origin(spec), spec.dp); }
+
 /// The lattice points of a body: its shape filled, less the points inside the walls it names in `subtract` or
 /// closer than dp/2 to their surfaces (so that no body particle comes closer than dp/2 to a wall's).
 std::vector<Vec> body_points(const CaseSpec& spec, const BodySpec& b) {
   std::vector<Vec> points = b.surface ? fill_region(b.rect.lo, b.rect.hi, spec.dp, ClosedSurface::distance_function(b.surface))
-                            : !b.round ? fill_rectangle(b.rect.lo, b.rect.hi, spec.dp)
+                            : !b.round ? fill_rectangle(on_lattice(spec, b.rect).lo, on_lattice(spec, b.rect).hi, spec.dp)
                             : b.round->kind == RoundShape::Kind::sphere
                                 ? fill_sphere(b.round->centre, b.round->radius, spec.dp)
                                 : fill_cylinder(b.round->centre, b.round->axis, b.round->radius, spec.dp);
@@ -68,8 +88,14 @@ std::vector<Vec> body_points(const CaseSpec& spec, const BodySpec& b) {
 /// The wall points of a wall (core/geometry.hpp's builders).
 std::vector<WallPoint> wall_points(const CaseSpec& spec, const WallSpec& w) {
   switch (w.type) {
-    case WallType::box: return box_walls(w.rect.lo, w.rect.hi, spec.dp, w.open_top);
-    case WallType::block: return block_walls(w.rect.lo, w.rect.hi, spec.dp);
+    case WallType::box: {
+      const Rect r = on_lattice(spec, w.rect);
+      return box_walls(r.lo, r.hi, spec.dp, w.open_top);
+    }
+    case WallType::block: {
+      const Rect r = on_lattice(spec, w.rect);
+      return block_walls(r.lo, r.hi, spec.dp);
+    }
     case WallType::sphere: return sphere_walls(w.round->centre, w.round->radius, spec.dp);
     case WallType::cylinder: return cylinder_walls(w.round->centre, w.round->axis, w.round->radius, spec.dp);
     case WallType::surface:
@@ -120,7 +146,7 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
   Vec lo = Vec::Constant(std::numeric_limits<Real>::max()), hi = -lo;
   Real free_lo = std::numeric_limits<Real>::max(), free_hi = -free_lo;
   for (const auto& x : points) {
-    const bool clamp = is_solid && b.clamp && b.clamp->contains(x);
+    const bool clamp = is_solid && in_clamp(spec, b, x);
     const Vec r = x - centroid;
     // Rigid motion: v = v0 + omega x r.
     const Vec v = clamp ? Vec::Zero() : Vec(b.velocity + cross(b.angular_velocity, r));
@@ -156,6 +182,13 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
 bool taken_by_clamp(const ParticleSet& p, const std::vector<LocalIndex>& clamped, const Vec& x, const Real dp) {
   for (const auto i : clamped)
     if ((p.position[static_cast<std::size_t>(i)] - x).squaredNorm() < 0.25 * dp * dp) return true;
+  return false;
+}
+
+/// As taken_by_clamp, for the clamped particles' positions.
+bool near_any(const std::vector<Vec>& clamped, const Vec& x, const Real dp) {
+  for (const Vec& c : clamped)
+    if ((c - x).squaredNorm() < 0.25 * dp * dp) return true;
   return false;
 }
 
@@ -429,11 +462,12 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
 
 namespace {
 
-/// Lattice cells (round(side / dp), at least 1) along each side of a rectangle.
+/// Lattice cells along each side of a rectangle of the case, on the case's lattice (as build_scene fills it).
 using Cells = std::array<std::size_t, dim>;
-Cells cells(const Rect& r, const Real dp) {
+Cells cells(const CaseSpec& spec, const Rect& r) {
+  const Rect on = on_lattice(spec, r);
   Cells n;
-  for (int a = 0; a < dim; ++a) n[a] = static_cast<std::size_t>(lattice_cells(r.size()[a], dp));
+  for (int a = 0; a < dim; ++a) n[a] = static_cast<std::size_t>(lattice_cells(on.size()[a], spec.dp));
   return n;
 }
 
@@ -483,11 +517,17 @@ ParticleCounts count_particles(const CaseSpec& spec) {
     (b.kind == BodyKind::solid ? n.solid : n.fluid) +=
         b.surface || !b.subtract.empty() ? body_points(spec, b).size()  // counted by building them
         : b.round                        ? count_round(*b.round, spec.dp).filled
-                                         : product(cells(b.rect, spec.dp));
+                                         : product(cells(spec, b.rect));
   constexpr std::size_t n_dummy = 2;  // the default of the wall builders, which build_scene uses
+  std::vector<Vec> clamped;  // the clamped particles of the bodies
+  for (const auto& b : spec.bodies)
+    if (b.kind == BodyKind::solid && b.clamp)
+      for (const Vec& x : body_points(spec, b))
+        if (in_clamp(spec, b, x)) clamped.push_back(x);
   for (const auto& w : spec.walls) {
     if (w.surface) {  // counted by building them
-      for (const WallPoint& x : wall_points(spec, w)) (x.is_wall ? n.wall : n.dummy) += 1;
+      for (const WallPoint& x : wall_points(spec, w))
+        if (!near_any(clamped, x.x, spec.dp)) (x.is_wall ? n.wall : n.dummy) += 1;
       continue;
     }
     if (w.round) {  // the layers inside the surface
@@ -496,7 +536,12 @@ ParticleCounts count_particles(const CaseSpec& spec) {
       n.dummy += c.layers - c.wall;
       continue;
     }
-    const Cells c = cells(w.rect, spec.dp);
+    if (!clamped.empty()) {  // wall points give way to clamped particles in the wall (add_wall): counted by building them
+      for (const WallPoint& x : wall_points(spec, w))
+        if (!near_any(clamped, x.x, spec.dp)) (x.is_wall ? n.wall : n.dummy) += 1;
+      continue;
+    }
+    const Cells c = cells(spec, w.rect);
     const std::size_t wall = w.type == WallType::box ? box_cells(c, 1, w.open_top) : block_cells(c, 0);
     const std::size_t all = w.type == WallType::box ? box_cells(c, 1 + n_dummy, w.open_top) : block_cells(c, n_dummy);
     n.wall += wall;

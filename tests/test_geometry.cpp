@@ -59,6 +59,45 @@ TEST(Geometry, LatticeCellsRoundsAndRejectsBadInput) {
 }
 
 #if MPSFSI_DIM == 2
+// Rectangles on one lattice: touching rectangles whose shared face is not on the lattice (0.302 = 75.5 dp at
+// dp 4 mm, the sloshing cases' oil | plate | oil) get neighbouring cells, dp apart, none shared and none left out;
+// a rectangle on the lattice keeps its corner bit for bit; a side shorter than dp keeps one cell from lo.
+TEST(Geometry, LatticeRectPutsTouchingRectanglesOnOneLattice) {
+  const Real dp = 0.004;
+  const Vec origin = Vec::Zero();
+  Vec lo = Vec::Zero(), hi = Vec::Constant(0.1148);
+  hi[0] = 0.302;
+  const Rect left = lattice_rect(lo, hi, origin, dp);
+  lo[0] = 0.302, hi[0] = 0.306;
+  const Rect plate = lattice_rect(lo, hi, origin, dp);
+  lo[0] = 0.306, hi[0] = 0.609;
+  const Rect right = lattice_rect(lo, hi, origin, dp);
+  EXPECT_EQ(left.lo[0], 0.0);
+  EXPECT_NEAR(left.hi[0], 0.304, 1e-12);  // centres up to 0.302, the one on the face
+  EXPECT_NEAR(plate.lo[0], 0.304, 1e-12);
+  EXPECT_NEAR(plate.hi[0], 0.308, 1e-12);  // one cell, centre 0.306
+  EXPECT_NEAR(right.lo[0], 0.308, 1e-12);
+  EXPECT_NEAR(right.hi[0], 0.608, 1e-12);  // centres up to 0.606 <= 0.609 < 0.610
+  EXPECT_EQ(left.lo[1], 0.0);
+  EXPECT_NEAR(left.hi[1], 29 * dp, 1e-12);  // 0.1148 = 28.7 dp
+  std::vector<Vec> x;
+  for (const Rect& r : {left, plate, right})
+    for (const Vec& p : fill_rectangle(r.lo, r.hi, dp)) x.push_back(p);
+  EXPECT_EQ(x.size(), static_cast<std::size_t>((76 + 1 + 75) * 29 * (dim == 3 ? 29 : 1)));
+  EXPECT_NEAR(min_spacing(x, 1.5 * dp), dp, 1e-12);
+
+  // On the lattice: lo kept exactly (0.306 = 153 cells of 2 mm), the count as fill_rectangle's round(side / dp).
+  const Rect aligned = lattice_rect(Vec::Constant(0.306), Vec::Constant(0.609), origin, 0.002);
+  EXPECT_EQ(aligned.lo[0], 0.306);
+  EXPECT_NEAR(aligned.hi[0], 0.306 + lattice_cells(0.303, 0.002) * 0.002, 1e-12);
+  // A side shorter than dp with no centre in it: one cell from lo.
+  const Rect thin = lattice_rect(Vec::Constant(0.3005), Vec::Constant(0.3015), origin, dp);
+  EXPECT_EQ(thin.lo[0], 0.3005);
+  EXPECT_NEAR(thin.hi[0], 0.3045, 1e-12);
+  EXPECT_THROW(lattice_rect(Vec::Zero(), Vec::Zero(), origin, dp), std::invalid_argument);
+  EXPECT_THROW(lattice_rect(Vec::Zero(), Vec::Ones(), origin, 0.0), std::invalid_argument);
+}
+
 TEST(Geometry, OpenBoxWallsHaveOneWallAndTwoDummyLayers) {
   const Real dp = 0.01;
   const int nx = 20, ny = 10;
