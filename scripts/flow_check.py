@@ -91,16 +91,46 @@ def find_case_dir(case):
     return "."
 
 
+def lattice_origin(case):
+    """The corner of the case's lattice, as io/scene.cpp takes it: the first box wall's low corner, else the first
+    rectangle body's, else the origin."""
+    dim = int(case.get("dimension", 2))
+    for w in case.get("walls", []) or []:
+        if w.get("type", "box") == "box" and "rectangle" in w:
+            return np.array(w["rectangle"]["min"], float)
+    for b in case.get("bodies", []) or []:
+        if "rectangle" in b and not any(k in b for k in ("sphere", "cylinder", "polygon", "surface")):
+            return np.array(b["rectangle"]["min"], float)
+    return np.zeros(dim)
+
+
+def lattice_rect(lo, hi, origin, dp):
+    """core/geometry.cpp's lattice_rect: the faces of the lattice cells (faces at origin + k dp) whose centres c
+    satisfy lo < c <= hi on each axis; one cell from lo on an axis that holds none."""
+    tol = 1e-9
+    rlo, rhi = np.array(lo, float), np.array(hi, float)
+    for a in range(len(lo)):
+        f_lo, f_hi = (lo[a] - origin[a]) / dp, (hi[a] - origin[a]) / dp
+        first, last = np.floor(f_lo - 0.5 + tol) + 1, np.floor(f_hi - 0.5 + tol)
+        if last < first:
+            rlo[a], rhi[a] = lo[a], lo[a] + dp
+            continue
+        rlo[a] = lo[a] if abs(f_lo - round(f_lo)) < tol else origin[a] + first * dp
+        rhi[a] = rlo[a] + (last - first + 1) * dp
+    return rlo, rhi
+
+
 def tank_boxes(case, case_dir="."):
     """The walls of the case as (lo, hi, kind, open_top): kind "box" with its inner faces, "block" with its outer
     ones; None for a moving tank (its walls are not where the case puts them), whose particles are then not
-    checked. The faces are the lattice's, as the program builds them (core/geometry.cpp): hi = lo + n dp with
-    n = round((hi - lo) / dp), at least 1."""
+    checked. The faces are the lattice's, as the program builds them (core/geometry.cpp, lattice_rect: every box
+    and block on the case's one lattice)."""
     if case.get("tank_motion"):
         return None
     dp = float(case["dp"])
     boxes = []
     dim = int(case.get("dimension", 2))
+    origin = lattice_origin(case)
     for w in case.get("walls", []) or []:
         if w.get("motion"):
             continue  # a wall that moves on its own is not where the case puts it: not checked
@@ -118,9 +148,8 @@ def tank_boxes(case, case_dir="."):
             boxes.append((np.array(c["base"], float), np.array(c["axis"], float), "cylinder", float(c["radius"]), dp))
             continue
         r = w["rectangle"]
-        lo, hi = np.array(r["min"], float), np.array(r["max"], float)
-        cells = np.maximum(1, np.floor((hi - lo) / dp + 0.5))  # std::round: halves away from zero
-        boxes.append((lo, lo + cells * dp, w.get("type", "box"), bool(w.get("open_top", False)), dp))
+        lo, hi = lattice_rect(np.array(r["min"], float), np.array(r["max"], float), origin, dp)
+        boxes.append((lo, hi, w.get("type", "box"), bool(w.get("open_top", False)), dp))
     return boxes
 
 
