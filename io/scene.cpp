@@ -519,15 +519,9 @@ ParticleCounts count_particles(const CaseSpec& spec) {
         : b.round                        ? count_round(*b.round, spec.dp).filled
                                          : product(cells(spec, b.rect));
   constexpr std::size_t n_dummy = 2;  // the default of the wall builders, which build_scene uses
-  std::vector<Vec> clamped;  // the clamped particles of the bodies
-  for (const auto& b : spec.bodies)
-    if (b.kind == BodyKind::solid && b.clamp)
-      for (const Vec& x : body_points(spec, b))
-        if (in_clamp(spec, b, x)) clamped.push_back(x);
   for (const auto& w : spec.walls) {
     if (w.surface) {  // counted by building them
-      for (const WallPoint& x : wall_points(spec, w))
-        if (!near_any(clamped, x.x, spec.dp)) (x.is_wall ? n.wall : n.dummy) += 1;
+      for (const WallPoint& x : wall_points(spec, w)) (x.is_wall ? n.wall : n.dummy) += 1;
       continue;
     }
     if (w.round) {  // the layers inside the surface
@@ -536,17 +530,29 @@ ParticleCounts count_particles(const CaseSpec& spec) {
       n.dummy += c.layers - c.wall;
       continue;
     }
-    if (!clamped.empty()) {  // wall points give way to clamped particles in the wall (add_wall): counted by building them
-      for (const WallPoint& x : wall_points(spec, w))
-        if (!near_any(clamped, x.x, spec.dp)) (x.is_wall ? n.wall : n.dummy) += 1;
-      continue;
-    }
     const Cells c = cells(spec, w.rect);
     const std::size_t wall = w.type == WallType::box ? box_cells(c, 1, w.open_top) : block_cells(c, 0);
     const std::size_t all = w.type == WallType::box ? box_cells(c, 1 + n_dummy, w.open_top) : block_cells(c, n_dummy);
     n.wall += wall;
     n.dummy += all - wall;
   }
+  // Wall points give way to clamped particles embedded in a wall (add_wall). Below a size at which building the
+  // clamped particles and the walls takes a moment they are counted exactly; above it the count stays an upper bound
+  // by at most the clamped particles, which is all the memory check needs.
+  constexpr std::size_t exact_below = 2'000'000;
+  if (n.total() >= exact_below) return n;
+  std::vector<Vec> clamped;
+  for (const auto& b : spec.bodies)
+    if (b.kind == BodyKind::solid && b.clamp)
+      for (const Vec& x : body_points(spec, b))
+        if (in_clamp(spec, b, x)) clamped.push_back(x);
+  if (clamped.empty()) return n;
+  Vec lo = clamped.front(), hi = clamped.front();
+  for (const Vec& x : clamped) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  const Rect near_clamps{lo.array() - spec.dp, hi.array() + spec.dp};
+  for (const auto& w : spec.walls)
+    for (const WallPoint& x : wall_points(spec, w))
+      if (near_clamps.contains(x.x) && near_any(clamped, x.x, spec.dp)) (x.is_wall ? n.wall : n.dummy) -= 1;
   return n;
 }
 
