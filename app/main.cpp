@@ -18,27 +18,15 @@
 #include <cstdlib>
 #include <exception>
 #include <iostream>
-#include <optional>
 #include <sstream>
 #include <string>
 
 namespace {
-/// MPI for a run; finalized on every return path. `check`, `--help` and `--version` are serial and do not start
-/// MPI (its start is most of a check's time).
+/// MPI for the whole program; finalized on every return path.
 struct MpiSession {
   MpiSession(int* argc, char*** argv) { MPI_Init(argc, argv); }
   ~MpiSession() { MPI_Finalize(); }
 };
-
-/// This process's rank as the launcher (mpirun of Open MPI or MPICH, PMIx) announces it before MPI starts; 0
-/// without a launcher. Decides which process prints the help, version and input errors of a serial command.
-int launcher_rank() {
-  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"}) {
-    const char* value = std::getenv(name);
-    if (value && *value) return std::atoi(value);
-  }
-  return 0;
-}
 
 /// An option value that must not be empty (`--output ''` is refused, not read as the default).
 const CLI::Validator non_empty([](std::string& s) { return s.empty() ? std::string("expected a non-empty value") : std::string(); },
@@ -80,6 +68,7 @@ int main(int argc, char** argv) {
 #else
   const std::string version = "mpsfsi " + version_and_dimension();
 #endif
+  const MpiSession mpi(&argc, &argv);
   std::string command_line;
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
   CLI::App app{"mpsfsi: fluid-structure interaction with the Moving Particle Semi-implicit method"};
@@ -124,9 +113,9 @@ int main(int argc, char** argv) {
   check->add_option("--output", check_opts.output, "Also write the initial particles (.vtu/.pvd) into this folder")
       ->check(non_empty);
 
-  // Input errors are the same on every rank: only rank 0 prints them (and the help / version text). A run starts
-  // MPI once the command line is read; under mpirun the other commands are done by rank 0 alone.
-  int rank = launcher_rank();
+  // Input errors are the same on every rank: only rank 0 prints them (and the help / version text).
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   std::ostringstream no_output;
   std::ostream& out = rank == 0 ? std::cout : no_output;
   std::ostream& err = rank == 0 ? std::cerr : no_output;
@@ -139,14 +128,9 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  std::optional<MpiSession> mpi;
   try {
-    if (*check) return rank == 0 ? command_check(check_opts) : 0;
-    if (*run) {
-      mpi.emplace(&argc, &argv);
-      MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-      return command_run(run_opts, command_line);
-    }
+    if (*check) return command_check(check_opts);
+    if (*run) return command_run(run_opts, command_line);
   } catch (const CaseError& e) {
     err << "mpsfsi: error: " << e.what() << "\n";
     return 2;

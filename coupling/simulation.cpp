@@ -505,7 +505,7 @@ RunProjection project_run(const CaseSpec& spec, const ParticleSet& p, const Real
       c_p = std::max(c_p, p_wave_speed(spec.solid_materials[m], spec.solid));
     }
   }
-  if (comm != MPI_COMM_SELF && size_of(comm) > 1) {
+  if (size_of(comm) > 1) {
     Real maxima[3] = {v_max, nu, c_p};
     unsigned long long counts[3] = {n_fluid, n_solid, n_all};
     MPI_Allreduce(MPI_IN_PLACE, maxima, 3, MPI_DOUBLE, MPI_MAX, comm);

@@ -98,8 +98,7 @@ struct RunProjection {
 };
 
 /// The projection of a case from time t at the current state of `particles` (the first dt of the fluid's
-/// limits, fluid_stable_dt, and of the solid's, dt_factor dp / c_p). With MPI_COMM_SELF the particles are the
-/// whole case and MPI is not used (`check` does not start it).
+/// limits, fluid_stable_dt, and of the solid's, dt_factor dp / c_p).
 RunProjection project_run(const CaseSpec& spec, const ParticleSet& particles, Real t = 0, MPI_Comm comm = MPI_COMM_SELF);
 
 /// Run a case to its end time. Throws RunFailure (after writing the last good frame) when the
