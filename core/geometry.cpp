@@ -54,7 +54,7 @@ int lattice_cells(const Real length, const Real dp) {
 }
 
 Rect lattice_rect(const Vec& lo, const Vec& hi, const Vec& origin, const Real dp) {
-  lattice_cells(1, dp);  // checks dp
+  if (!(dp > 0)) throw std::invalid_argument("lattice: dp must be positive");
   const Real tol = 1e-9;
   Rect r;
   for (int a = 0; a < dim; ++a) {

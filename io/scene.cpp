@@ -67,8 +67,9 @@ Rect on_lattice(const CaseSpec& spec, const Rect& r) { return lattice_rect(r.lo,
 /// The lattice points of a body: its shape filled, less the points inside the walls it names in `subtract` or
 /// closer than dp/2 to their surfaces (so that no body particle comes closer than dp/2 to a wall's).
 std::vector<Vec> body_points(const CaseSpec& spec, const BodySpec& b) {
+  const Rect rect = b.surface || b.round ? b.rect : on_lattice(spec, b.rect);
   std::vector<Vec> points = b.surface ? fill_region(b.rect.lo, b.rect.hi, spec.dp, ClosedSurface::distance_function(b.surface))
-                            : !b.round ? fill_rectangle(on_lattice(spec, b.rect).lo, on_lattice(spec, b.rect).hi, spec.dp)
+                            : !b.round ? fill_rectangle(rect.lo, rect.hi, spec.dp)
                             : b.round->kind == RoundShape::Kind::sphere
                                 ? fill_sphere(b.round->centre, b.round->radius, spec.dp)
                                 : fill_cylinder(b.round->centre, b.round->axis, b.round->radius, spec.dp);
@@ -178,29 +179,22 @@ void add_body(const CaseSpec& spec, const BodySpec& b, Scene& scene) {
 }
 
 /// Wall particles give way to clamped solid particles embedded in the wall (a plate clamped into the
-/// floor): a wall point closer than dp/2 to a clamped particle is left out.
-bool taken_by_clamp(const ParticleSet& p, const std::vector<LocalIndex>& clamped, const Vec& x, const Real dp) {
-  for (const auto i : clamped)
-    if ((p.position[static_cast<std::size_t>(i)] - x).squaredNorm() < 0.25 * dp * dp) return true;
-  return false;
-}
-
-/// As taken_by_clamp, for the clamped particles' positions.
-bool near_any(const std::vector<Vec>& clamped, const Vec& x, const Real dp) {
+/// floor): a wall point closer than dp/2 to a clamped particle (`clamped`: their positions) is left out.
+bool taken_by_clamp(const std::vector<Vec>& clamped, const Vec& x, const Real dp) {
   for (const Vec& c : clamped)
     if ((c - x).squaredNorm() < 0.25 * dp * dp) return true;
   return false;
 }
 
-/// `clamped`: the clamped particles of the bodies (added before the walls).
-void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<LocalIndex>& clamped, Scene& scene) {
+/// `clamped`: the positions of the clamped particles of the bodies (added before the walls).
+void add_wall(const CaseSpec& spec, const WallSpec& w, const std::vector<Vec>& clamped, Scene& scene) {
   auto& p = scene.particles;
   const int body_index = static_cast<int>(p.bodies.size());
   p.bodies.push_back({w.name, ParticleKind::wall, -1});
   const auto all_points = wall_points(spec, w);
   std::vector<WallPoint> points;
   for (const auto& pt : all_points)
-    if (clamped.empty() || !taken_by_clamp(p, clamped, pt.x, spec.dp)) points.push_back(pt);
+    if (!taken_by_clamp(clamped, pt.x, spec.dp)) points.push_back(pt);
   BodyCount count;
   count.name = w.name;
   count.kind = "wall";
@@ -445,9 +439,9 @@ Scene build_scene(const CaseSpec& spec, const std::optional<std::size_t>& availa
   check_scene_size(spec, available_memory);
   Scene scene;
   for (const auto& b : spec.bodies) add_body(spec, b, scene);
-  std::vector<LocalIndex> clamped;
+  std::vector<Vec> clamped;
   for (std::size_t i = 0; i < scene.particles.size(); ++i)
-    if (scene.particles.clamped[i]) clamped.push_back(static_cast<LocalIndex>(i));
+    if (scene.particles.clamped[i]) clamped.push_back(scene.particles.position[i]);
   for (const auto& w : spec.walls) add_wall(spec, w, clamped, scene);
   check_overlap(spec, scene.particles);
   if (scene.particles.has_vector_field(wall_surface_field)) {
@@ -552,7 +546,7 @@ ParticleCounts count_particles(const CaseSpec& spec) {
   const Rect near_clamps{lo.array() - spec.dp, hi.array() + spec.dp};
   for (const auto& w : spec.walls)
     for (const WallPoint& x : wall_points(spec, w))
-      if (near_clamps.contains(x.x) && near_any(clamped, x.x, spec.dp)) (x.is_wall ? n.wall : n.dummy) -= 1;
+      if (near_clamps.contains(x.x) && taken_by_clamp(clamped, x.x, spec.dp)) (x.is_wall ? n.wall : n.dummy) -= 1;
   return n;
 }
 

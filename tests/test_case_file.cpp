@@ -2,6 +2,7 @@
 // kind of bad input gives a CaseError naming file, line, key and expected form, --set overrides,
 // and a fuzz test (mutated case files either parse or throw CaseError, nothing else).
 #include "core/geometry.hpp"
+#include "core/neighbours.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
 
@@ -1139,11 +1140,12 @@ TEST(Scene, BodiesThatTouchAreDpApartAtAnyDp) {
     const CaseSpec spec = load_case(cases + name + ".yaml", {"dp=" + dp});
     const Scene scene = build_scene(spec);
     const auto& p = scene.particles;
-    Real closest = spec.dp * 10;
+    NeighbourList nl;
+    build_neighbour_list(p.position, 1.5 * spec.dp, nl);
+    Real closest = 1.5 * spec.dp;
     for (std::size_t i = 0; i < p.size(); ++i)
-      for (std::size_t j = i + 1; j < p.size(); ++j)
-        if (p.body[i] != p.body[j] && std::abs(p.position[i][0] - p.position[j][0]) < spec.dp)
-          closest = std::min(closest, (p.position[i] - p.position[j]).norm());
+      for (std::size_t k = nl.begin(i); k < nl.end(i); ++k)
+        if (p.body[i] != p.body[nl.index[k]]) closest = std::min(closest, (p.position[nl.index[k]] - p.position[i]).norm());
     EXPECT_NEAR(closest, spec.dp, 1e-9 * spec.dp) << name << " at dp " << dp;
   }
 }
