@@ -74,6 +74,17 @@ Rect lattice_rect(const Vec& lo, const Vec& hi, const Vec& origin, const Real dp
   return r;
 }
 
+Vec lattice_corner(const Vec& x, const Vec& origin, const Real dp) {
+  if (!(dp > 0)) throw std::invalid_argument("lattice: dp must be positive");
+  Vec corner;
+  for (int a = 0; a < dim; ++a) {
+    const double f = (x[a] - origin[a]) / dp;
+    if (std::abs(f) > 1e8) throw std::invalid_argument("lattice: too many particles along one side");
+    corner[a] = std::abs(f - std::round(f)) < 1e-9 ? x[a] : origin[a] + std::floor(f) * dp;
+  }
+  return corner;
+}
+
 std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, const Real dp) {
   const IVec n = cells_of(lo, hi, dp);
   std::vector<Vec> x;
@@ -88,8 +99,17 @@ namespace {
 
 /// Checks the cylinder's arguments and calls f(x, s, r) for every lattice point x of fill_cylinder inside it,
 /// s its coordinate along the unit axis e from `base` and r = x - base - s e its offset from the axis.
+/// The first and last cells of the lattice anchored at `lo` (at lattice_corner(lo) with an origin) that cover
+/// the bounding box [lo, hi]; returns the anchor.
+Vec round_lattice(const Vec& lo, const Vec& hi, const Real dp, const std::optional<Vec>& origin, IVec& last) {
+  const Vec anchor = origin ? lattice_corner(lo, *origin, dp) : lo;
+  for (int a = 0; a < dim; ++a) last[a] = static_cast<int>(std::ceil((hi[a] - anchor[a]) / dp)) - 1;
+  return anchor;
+}
+
 template <class F>
-void for_each_cylinder_point(const Vec& base, const Vec& axis, const Real radius, const Real dp, F&& f) {
+void for_each_cylinder_point(const Vec& base, const Vec& axis, const Real radius, const Real dp,
+                             const std::optional<Vec>& origin, F&& f) {
   if (!(dp > 0)) throw std::invalid_argument("cylinder: dp must be positive");
   if (!(radius > 0)) throw std::invalid_argument("cylinder: radius must be positive");
   const Real length = axis.norm();
@@ -98,9 +118,8 @@ void for_each_cylinder_point(const Vec& base, const Vec& axis, const Real radius
   // Bounding box: the end discs' extents along each coordinate axis, radius sqrt(1 - e_a^2).
   Vec reach;
   for (int a = 0; a < dim; ++a) reach[a] = radius * std::sqrt(std::max(Real(0), 1 - e[a] * e[a]));
-  const Vec lo = base.cwiseMin(base + axis) - reach, hi = base.cwiseMax(base + axis) + reach;
   IVec last;
-  for (int a = 0; a < dim; ++a) last[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / dp)) - 1;
+  const Vec lo = round_lattice(base.cwiseMin(base + axis) - reach, base.cwiseMax(base + axis) + reach, dp, origin, last);
   const Real tol = 1e-9 * dp;
   for_each_cell(IVec::Zero(), last, [&](const IVec& i) {
     const Vec x = centre(lo, i, dp);
@@ -113,11 +132,12 @@ void for_each_cylinder_point(const Vec& base, const Vec& axis, const Real radius
 
 /// Checks the ball's arguments and calls f(x) for every lattice point x of fill_sphere inside it.
 template <class F>
-void for_each_sphere_point(const Vec& centre_point, const Real radius, const Real dp, F&& f) {
+void for_each_sphere_point(const Vec& centre_point, const Real radius, const Real dp, const std::optional<Vec>& origin,
+                           F&& f) {
   if (!(dp > 0)) throw std::invalid_argument("sphere: dp must be positive");
   if (!(radius > 0)) throw std::invalid_argument("sphere: radius must be positive");
-  const Vec lo = centre_point - Vec::Constant(radius);
-  const IVec last = IVec::Constant(static_cast<int>(std::ceil(2 * radius / dp)) - 1);
+  IVec last;
+  const Vec lo = round_lattice(centre_point - Vec::Constant(radius), centre_point + Vec::Constant(radius), dp, origin, last);
   const Real tol = 1e-9 * dp;
   for_each_cell(IVec::Zero(), last, [&](const IVec& i) {
     const Vec x = centre(lo, i, dp);
@@ -134,15 +154,17 @@ int wall_layer(const Real depth, const Real dp, const int n_dummy) {
 
 }  // namespace
 
-std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp) {
+std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp,
+                               const std::optional<Vec>& origin) {
   std::vector<Vec> points;
-  for_each_cylinder_point(base, axis, radius, dp, [&](const Vec& x, Real, const Vec&) { points.push_back(x); });
+  for_each_cylinder_point(base, axis, radius, dp, origin, [&](const Vec& x, Real, const Vec&) { points.push_back(x); });
   return points;
 }
 
-std::vector<Vec> fill_sphere(const Vec& centre_point, const Real radius, const Real dp) {
+std::vector<Vec> fill_sphere(const Vec& centre_point, const Real radius, const Real dp,
+                             const std::optional<Vec>& origin) {
   std::vector<Vec> points;
-  for_each_sphere_point(centre_point, radius, dp, [&](const Vec& x) { points.push_back(x); });
+  for_each_sphere_point(centre_point, radius, dp, origin, [&](const Vec& x) { points.push_back(x); });
   return points;
 }
 
@@ -188,9 +210,10 @@ WallPoint cylinder_point(const Vec& x, const Real s, const Vec& r, const Vec& e,
 
 }  // namespace
 
-std::vector<WallPoint> sphere_walls(const Vec& centre_point, const Real radius, const Real dp, const int n_dummy) {
+std::vector<WallPoint> sphere_walls(const Vec& centre_point, const Real radius, const Real dp, const int n_dummy,
+                                    const std::optional<Vec>& origin) {
   std::vector<WallPoint> pts;
-  for_each_sphere_point(centre_point, radius, dp, [&](const Vec& x) {
+  for_each_sphere_point(centre_point, radius, dp, origin, [&](const Vec& x) {
     Real depth = 0;
     WallPoint p = sphere_point(x, centre_point, radius, dp, depth);
     const int layer = wall_layer(depth, dp, n_dummy);
@@ -202,10 +225,10 @@ std::vector<WallPoint> sphere_walls(const Vec& centre_point, const Real radius, 
 }
 
 std::vector<WallPoint> cylinder_walls(const Vec& base, const Vec& axis, const Real radius, const Real dp,
-                                      const int n_dummy) {
+                                      const int n_dummy, const std::optional<Vec>& origin) {
   const Real length = axis.norm();
   std::vector<WallPoint> pts;
-  for_each_cylinder_point(base, axis, radius, dp, [&](const Vec& x, const Real s, const Vec& r) {
+  for_each_cylinder_point(base, axis, radius, dp, origin, [&](const Vec& x, const Real s, const Vec& r) {
     Real depth = 0;
     WallPoint p = cylinder_point(x, s, r, axis / length, length, radius, dp, depth);
     const int layer = wall_layer(depth, dp, n_dummy);
@@ -216,9 +239,10 @@ std::vector<WallPoint> cylinder_walls(const Vec& base, const Vec& axis, const Re
   return pts;
 }
 
-RoundCount count_sphere(const Vec& centre_point, const Real radius, const Real dp, const int n_dummy) {
+RoundCount count_sphere(const Vec& centre_point, const Real radius, const Real dp, const int n_dummy,
+                        const std::optional<Vec>& origin) {
   RoundCount c;
-  for_each_sphere_point(centre_point, radius, dp, [&](const Vec& x) {
+  for_each_sphere_point(centre_point, radius, dp, origin, [&](const Vec& x) {
     Real depth = 0;
     sphere_point(x, centre_point, radius, dp, depth);
     const int layer = wall_layer(depth, dp, n_dummy);
@@ -229,10 +253,11 @@ RoundCount count_sphere(const Vec& centre_point, const Real radius, const Real d
   return c;
 }
 
-RoundCount count_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp, const int n_dummy) {
+RoundCount count_cylinder(const Vec& base, const Vec& axis, const Real radius, const Real dp, const int n_dummy,
+                          const std::optional<Vec>& origin) {
   const Real length = axis.norm();
   RoundCount c;
-  for_each_cylinder_point(base, axis, radius, dp, [&](const Vec& x, const Real s, const Vec& r) {
+  for_each_cylinder_point(base, axis, radius, dp, origin, [&](const Vec& x, const Real s, const Vec& r) {
     Real depth = 0;
     cylinder_point(x, s, r, axis / length, length, radius, dp, depth);
     const int layer = wall_layer(depth, dp, n_dummy);

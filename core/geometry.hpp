@@ -9,6 +9,7 @@
 #include "core/types.hpp"
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace mpsfsi {
@@ -37,6 +38,12 @@ int lattice_cells(Real length, Real dp);
 /// than dp) keeps one cell from lo, as fill_rectangle does. Throws as lattice_cells.
 Rect lattice_rect(const Vec& lo, const Vec& hi, const Vec& origin, Real dp);
 
+/// The corner of the lattice with faces at origin + k dp (k whole) at or below x on every axis: the face at x
+/// itself where x is on the lattice (to 1e-9 dp). A region filled from this corner (fill_region, and the round
+/// shapes given the origin) lies on the same lattice as the rectangles of lattice_rect. Throws
+/// std::invalid_argument when dp is not positive or x is more than 1e8 cells from origin.
+Vec lattice_corner(const Vec& x, const Vec& origin, Real dp);
+
 /// Particle centres filling the rectangle [lo, hi]: lo + (i + 1/2, j + 1/2 [, k + 1/2]) dp for
 /// i < lattice_cells(hi_x - lo_x), j < lattice_cells(hi_y - lo_y) [, k < ...], row by row (x fastest,
 /// then y, then z).
@@ -44,15 +51,18 @@ std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, Real dp);
 
 /// Particle centres filling the cylinder of radius `radius` around the segment from `base` to `base + axis`: the
 /// points lo + (i + 1/2, j + 1/2 [, k + 1/2]) dp of the lattice anchored at the low corner lo of the cylinder's
-/// bounding box whose projection on the axis falls within the segment and whose distance from the axis is at
-/// most `radius` (in 2D the cylinder's section through its axis: a strip of width 2 radius). Throws
-/// std::invalid_argument when dp or radius is not positive or the axis is zero.
-std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp);
+/// bounding box (with `origin`: at lattice_corner of that corner, the lattice of the case's rectangles) whose
+/// projection on the axis falls within the segment and whose distance from the axis is at most `radius` (in 2D
+/// the cylinder's section through its axis: a strip of width 2 radius). Throws std::invalid_argument when dp or
+/// radius is not positive or the axis is zero.
+std::vector<Vec> fill_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp,
+                               const std::optional<Vec>& origin = std::nullopt);
 
 /// Particle centres filling the ball of radius `radius` about `centre` (a disc in 2D): the points
-/// lo + (i + 1/2 [, ...]) dp of the lattice anchored at the ball's low corner lo = centre - radius whose distance
-/// from the centre is at most `radius`. Throws std::invalid_argument when dp or radius is not positive.
-std::vector<Vec> fill_sphere(const Vec& centre, Real radius, Real dp);
+/// lo + (i + 1/2 [, ...]) dp of the lattice anchored at the ball's low corner lo = centre - radius (with
+/// `origin`: at lattice_corner of it) whose distance from the centre is at most `radius`. Throws
+/// std::invalid_argument when dp or radius is not positive.
+std::vector<Vec> fill_sphere(const Vec& centre, Real radius, Real dp, const std::optional<Vec>& origin = std::nullopt);
 
 /// A lattice point of a wall, whether it belongs to the wall layer (true) or a dummy layer (false), and the
 /// offset from it to the nearest point of the wetted surface (the face the fluid touches; at an edge or a corner
@@ -81,12 +91,14 @@ std::vector<WallPoint> block_walls(const Vec& lo, const Vec& hi, Real dp, int n_
 /// A solid ball (a disc in 2D) made of wall particles, on the lattice of fill_sphere: the points less than dp
 /// below the surface are wall, the next n_dummy layers (depth below (1 + n_dummy) dp) dummy; deeper points are
 /// left out, as in block_walls. to_surface points radially out to the surface.
-std::vector<WallPoint> sphere_walls(const Vec& centre, Real radius, Real dp, int n_dummy = 2);
+std::vector<WallPoint> sphere_walls(const Vec& centre, Real radius, Real dp, int n_dummy = 2,
+                                    const std::optional<Vec>& origin = std::nullopt);
 
 /// A solid cylinder made of wall particles, on the lattice of fill_cylinder: the depth of a point is its
 /// distance to the nearest of the lateral surface and the two end faces; layers as in sphere_walls, and
 /// to_surface points to the nearest point of that surface.
-std::vector<WallPoint> cylinder_walls(const Vec& base, const Vec& axis, Real radius, Real dp, int n_dummy = 2);
+std::vector<WallPoint> cylinder_walls(const Vec& base, const Vec& axis, Real radius, Real dp, int n_dummy = 2,
+                                      const std::optional<Vec>& origin = std::nullopt);
 
 /// The points of a sphere's or cylinder's lattice, counted without making them: `filled` those of fill_sphere
 /// (fill_cylinder), `wall` and `layers` the wall points and the wall and dummy points of sphere_walls
@@ -94,8 +106,10 @@ std::vector<WallPoint> cylinder_walls(const Vec& base, const Vec& axis, Real rad
 struct RoundCount {
   std::size_t filled = 0, wall = 0, layers = 0;
 };
-RoundCount count_sphere(const Vec& centre, Real radius, Real dp, int n_dummy = 2);
-RoundCount count_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp, int n_dummy = 2);
+RoundCount count_sphere(const Vec& centre, Real radius, Real dp, int n_dummy = 2,
+                        const std::optional<Vec>& origin = std::nullopt);
+RoundCount count_cylinder(const Vec& base, const Vec& axis, Real radius, Real dp, int n_dummy = 2,
+                          const std::optional<Vec>& origin = std::nullopt);
 
 
 /// A region given by its signed distance: negative inside, positive outside, and in `nearest` the nearest point

@@ -30,11 +30,6 @@ double round_volume(const RoundShape& s) {
   return (dim == 2 ? 2 * s.radius : pi * s.radius * s.radius) * s.axis.norm();
 }
 
-/// The lattice points of a sphere or cylinder and of its wall layers (core/geometry.hpp), counted.
-RoundCount count_round(const RoundShape& s, const Real dp) {
-  return s.kind == RoundShape::Kind::sphere ? count_sphere(s.centre, s.radius, dp)
-                                            : count_cylinder(s.centre, s.axis, s.radius, dp);
-}
 
 /// The signed distance of an obstacle wall's shape (block, sphere, cylinder, surface), for the bodies it is cut out of.
 SignedDistance wall_distance(const WallSpec& w) {
@@ -52,7 +47,8 @@ bool in_clamp(const CaseSpec& spec, const BodySpec& b, const Vec& x) {
 }
 
 /// The corner of the case's lattice (core/geometry.hpp, lattice_rect): the first box wall's (the tank's) low corner,
-/// else the first rectangle body's, else the origin. Rectangle bodies, box walls and block walls are put on it.
+/// else the first rectangle body's, else the origin. Every body and wall is filled on it: rectangles by lattice_rect,
+/// spheres, cylinders and surfaces from the lattice corner below their bounding box (lattice_corner).
 Vec lattice_origin(const CaseSpec& spec) {
   for (const auto& w : spec.walls)
     if (w.type == WallType::box) return w.rect.lo;
@@ -64,15 +60,29 @@ Vec lattice_origin(const CaseSpec& spec) {
 /// A rectangle of the case on its lattice.
 Rect on_lattice(const CaseSpec& spec, const Rect& r) { return lattice_rect(r.lo, r.hi, lattice_origin(spec), spec.dp); }
 
+/// The dummy layers behind every wall layer: the wall builders' default (core/geometry.hpp).
+constexpr int n_dummy_layers = 2;
+
+/// The corner from which a region of the case (a surface's bounding box from lo) is filled: on the case's lattice.
+Vec region_corner(const CaseSpec& spec, const Vec& lo) { return lattice_corner(lo, lattice_origin(spec), spec.dp); }
+
+/// The lattice points of a sphere or cylinder and of its wall layers (core/geometry.hpp) on the case's lattice, counted.
+RoundCount count_round(const CaseSpec& spec, const RoundShape& s) {
+  return s.kind == RoundShape::Kind::sphere
+             ? count_sphere(s.centre, s.radius, spec.dp, n_dummy_layers, lattice_origin(spec))
+             : count_cylinder(s.centre, s.axis, s.radius, spec.dp, n_dummy_layers, lattice_origin(spec));
+}
+
 /// The lattice points of a body: its shape filled, less the points inside the walls it names in `subtract` or
 /// closer than dp/2 to their surfaces (so that no body particle comes closer than dp/2 to a wall's).
 std::vector<Vec> body_points(const CaseSpec& spec, const BodySpec& b) {
   const Rect rect = b.surface || b.round ? b.rect : on_lattice(spec, b.rect);
-  std::vector<Vec> points = b.surface ? fill_region(b.rect.lo, b.rect.hi, spec.dp, ClosedSurface::distance_function(b.surface))
-                            : !b.round ? fill_rectangle(rect.lo, rect.hi, spec.dp)
-                            : b.round->kind == RoundShape::Kind::sphere
-                                ? fill_sphere(b.round->centre, b.round->radius, spec.dp)
-                                : fill_cylinder(b.round->centre, b.round->axis, b.round->radius, spec.dp);
+  std::vector<Vec> points =
+      b.surface  ? fill_region(region_corner(spec, b.rect.lo), b.rect.hi, spec.dp, ClosedSurface::distance_function(b.surface))
+      : !b.round ? fill_rectangle(rect.lo, rect.hi, spec.dp)
+      : b.round->kind == RoundShape::Kind::sphere
+          ? fill_sphere(b.round->centre, b.round->radius, spec.dp, lattice_origin(spec))
+          : fill_cylinder(b.round->centre, b.round->axis, b.round->radius, spec.dp, lattice_origin(spec));
   for (const std::string& name : b.subtract) {
     const auto w = std::find_if(spec.walls.begin(), spec.walls.end(), [&](const WallSpec& x) { return x.name == name; });
     if (w == spec.walls.end()) throw CaseError(fmt::format("{}: body '{}': no wall '{}' to subtract", spec.file, b.name, name));
@@ -91,17 +101,19 @@ std::vector<WallPoint> wall_points(const CaseSpec& spec, const WallSpec& w) {
   switch (w.type) {
     case WallType::box: {
       const Rect r = on_lattice(spec, w.rect);
-      return box_walls(r.lo, r.hi, spec.dp, w.open_top);
+      return box_walls(r.lo, r.hi, spec.dp, w.open_top, n_dummy_layers);
     }
     case WallType::block: {
       const Rect r = on_lattice(spec, w.rect);
-      return block_walls(r.lo, r.hi, spec.dp);
+      return block_walls(r.lo, r.hi, spec.dp, n_dummy_layers);
     }
-    case WallType::sphere: return sphere_walls(w.round->centre, w.round->radius, spec.dp);
-    case WallType::cylinder: return cylinder_walls(w.round->centre, w.round->axis, w.round->radius, spec.dp);
+    case WallType::sphere:
+      return sphere_walls(w.round->centre, w.round->radius, spec.dp, n_dummy_layers, lattice_origin(spec));
+    case WallType::cylinder:
+      return cylinder_walls(w.round->centre, w.round->axis, w.round->radius, spec.dp, n_dummy_layers, lattice_origin(spec));
     case WallType::surface:
-      return region_walls(w.rect.lo, w.rect.hi, spec.dp, ClosedSurface::distance_function(w.surface), w.fluid_inside,
-                          w.open_top);
+      return region_walls(region_corner(spec, w.rect.lo), w.rect.hi, spec.dp, ClosedSurface::distance_function(w.surface),
+                          w.fluid_inside, w.open_top, n_dummy_layers);
   }
   return {};
 }
@@ -510,16 +522,16 @@ ParticleCounts count_particles(const CaseSpec& spec) {
   for (const auto& b : spec.bodies)
     (b.kind == BodyKind::solid ? n.solid : n.fluid) +=
         b.surface || !b.subtract.empty() ? body_points(spec, b).size()  // counted by building them
-        : b.round                        ? count_round(*b.round, spec.dp).filled
+        : b.round                        ? count_round(spec, *b.round).filled
                                          : product(cells(spec, b.rect));
-  constexpr std::size_t n_dummy = 2;  // the default of the wall builders, which build_scene uses
+  constexpr auto n_dummy = static_cast<std::size_t>(n_dummy_layers);
   for (const auto& w : spec.walls) {
     if (w.surface) {  // counted by building them
       for (const WallPoint& x : wall_points(spec, w)) (x.is_wall ? n.wall : n.dummy) += 1;
       continue;
     }
     if (w.round) {  // the layers inside the surface
-      const RoundCount c = count_round(*w.round, spec.dp);
+      const RoundCount c = count_round(spec, *w.round);
       n.wall += c.wall;
       n.dummy += c.layers - c.wall;
       continue;

@@ -1150,6 +1150,40 @@ TEST(Scene, BodiesThatTouchAreDpApartAtAnyDp) {
   }
 }
 
+// Discs, cylinders and polygons whose bounding boxes are off the case's lattice are filled on it, like the
+// rectangles: every particle sits at a cell centre of the tank's lattice, so no two particles of different bodies
+// come closer than dp, and count_particles counts the shapes on that lattice.
+TEST(Scene, RoundAndPolygonBodiesAreOnTheCaseLattice) {
+  const std::string text =
+      replaced(minimal_case, "rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}", "rectangle: {min: [0, 0], max: [0.4, 0.3]}") +
+      "  - {name: drop, kind: fluid, material: water, sphere: {centre: [0.4513, 0.8529], radius: 0.0407}}\n"
+      "walls:\n  - {name: tank, type: box, rectangle: {min: [0, 0], max: [1, 1]}}\n"
+      "  - {name: pile, type: cylinder, cylinder: {base: [0.5137, 0], axis: [0, 0.3], radius: 0.0211}}\n"
+      "  - {name: ball, type: sphere, sphere: {centre: [0.7123, 0.6049], radius: 0.0507}}\n"
+      "  - {name: ramp, type: polygon, polygon: {points: [[0.6033, 0.0], [0.9977, 0.0], [0.9977, 0.2051]]}}\n";
+  const CaseSpec spec = parse_case(text, file_name);
+  const Scene scene = build_scene(spec);
+  const auto& p = scene.particles;
+  Real off = 0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int a = 0; a < dim; ++a) {
+      const Real f = p.position[i][a] / spec.dp - 0.5;
+      off = std::max(off, std::abs(f - std::round(f)));
+    }
+  EXPECT_LT(off, 1e-9);
+  NeighbourList nl;
+  build_neighbour_list(p.position, 1.5 * spec.dp, nl);
+  Real closest = 1.5 * spec.dp;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::size_t k = nl.begin(i); k < nl.end(i); ++k)
+      if (p.body[i] != p.body[nl.index[k]]) closest = std::min(closest, (p.position[nl.index[k]] - p.position[i]).norm());
+  EXPECT_NEAR(closest, spec.dp, 1e-9 * spec.dp);
+  const ParticleCounts n = count_particles(spec);
+  EXPECT_EQ(n.fluid, p.n_of_kind(ParticleKind::fluid));
+  EXPECT_EQ(n.wall, p.n_of_kind(ParticleKind::wall));
+  EXPECT_EQ(n.dummy, p.n_of_kind(ParticleKind::dummy));
+}
+
 TEST(Scene, TooLargeForTheMachineIsRefusedBeforeAllocating) {
   const std::string dam_break = std::string(MPSFSI_TEST_DATA_DIR) + "/../../cases/dam_break.yaml";
   const CaseSpec spec = load_case(dam_break, {"dp=1e-5"});

@@ -98,6 +98,44 @@ TEST(Geometry, LatticeRectPutsTouchingRectanglesOnOneLattice) {
   EXPECT_THROW(lattice_rect(Vec::Zero(), Vec::Ones(), origin, 0.0), std::invalid_argument);
 }
 
+// The lattice corner below a point: the face at or below it on every axis, the point itself on a face (to round-off);
+// a sphere and a cylinder given the origin are filled on that lattice, their own corner's when they are not.
+TEST(Geometry, LatticeCornerPutsRoundShapesOnTheCaseLattice) {
+  const Real dp = 0.004;
+  const Vec origin(-0.01, 0.002);
+  const Vec corner = lattice_corner(Vec(0.3137, 0.0211), origin, dp);
+  EXPECT_NEAR(corner[0], -0.01 + 80 * dp, 1e-12);  // 0.3137 = origin + 80.925 dp
+  EXPECT_NEAR(corner[1], 0.002 + 4 * dp, 1e-12);   // 0.0211 = origin + 4.775 dp
+  const Vec on(-0.01 + 75 * dp, 0.002 - 3 * dp);
+  EXPECT_EQ(lattice_corner(on, origin, dp), on);
+  EXPECT_THROW(lattice_corner(on, origin, 0.0), std::invalid_argument);
+  const auto on_lattice = [&](const std::vector<Vec>& points) {
+    Real off = 0;
+    for (const Vec& x : points)
+      for (int a = 0; a < dim; ++a) {
+        const Real f = (x[a] - origin[a]) / dp - 0.5;
+        off = std::max(off, std::abs(f - std::round(f)));
+      }
+    return off;
+  };
+  const auto sphere = fill_sphere(Vec(0.3137, 0.0211), 0.0307, dp, origin);
+  const auto cylinder = fill_cylinder(Vec(0.2013, 0.1007), Vec(0.05, 0.1), 0.0133, dp, origin);
+  ASSERT_GT(sphere.size(), 150u);
+  ASSERT_GT(cylinder.size(), 150u);
+  EXPECT_LT(on_lattice(sphere), 1e-9);
+  EXPECT_LT(on_lattice(cylinder), 1e-9);
+  EXPECT_GT(on_lattice(fill_sphere(Vec(0.3137, 0.0211), 0.0307, dp)), 0.1);  // its own corner's lattice
+  std::vector<Vec> walls;
+  for (const WallPoint& w : cylinder_walls(Vec(0.2013, 0.1007), Vec(0.05, 0.1), 0.0133, dp, 2, origin)) walls.push_back(w.x);
+  ASSERT_FALSE(walls.empty());
+  EXPECT_LT(on_lattice(walls), 1e-9);
+  // The same shape on either lattice: counts within the lattice's rounding, every point inside.
+  for (const Vec& x : sphere) EXPECT_LE((x - Vec(0.3137, 0.0211)).norm(), 0.0307 + 1e-12);
+  const RoundCount c = count_sphere(Vec(0.3137, 0.0211), 0.0307, dp, 2, origin);
+  EXPECT_EQ(c.filled, sphere.size());
+  EXPECT_EQ(c.layers, sphere_walls(Vec(0.3137, 0.0211), 0.0307, dp, 2, origin).size());
+}
+
 TEST(Geometry, OpenBoxWallsHaveOneWallAndTwoDummyLayers) {
   const Real dp = 0.01;
   const int nx = 20, ny = 10;
