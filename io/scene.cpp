@@ -416,10 +416,11 @@ std::vector<const WallSpec*> walls_by_body(const CaseSpec& spec, const ParticleS
   return wall_of_body;
 }
 
-/// No two particles of different bodies closer than dp/2 (bodies that touch sit dp apart). The particles
-/// sorted by cells of side dp/2 (SparseCells).
+/// No two particles of different bodies closer than dp, to round-off: every body is filled on the case's lattice,
+/// so bodies that touch sit dp apart, and a closer pair is an overlap (or a body thinner than dp beside another,
+/// which keeps one cell off the lattice). The particles sorted by cells of side dp (SparseCells).
 void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
-  const Real h = 0.5 * spec.dp;
+  const Real h = spec.dp * (1 - 1e-6);
   std::vector<std::size_t> all(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!p.position[i].allFinite()) throw CaseError(fmt::format("{}: a particle position is not finite", spec.file));
@@ -431,17 +432,17 @@ void check_overlap(const CaseSpec& spec, const ParticleSet& p) {
     std::size_t j_min = p.size();
     cells.any_near(p.position[i], [&](const std::size_t j) {
       // r = 0 included (unlike in_support): two walls on the same lattice points overlap too.
-      if (p.body[i] != p.body[j] && (p.position[j] - p.position[i]).squaredNorm() < h * h * (1.0 - support_margin))
+      if (p.body[i] != p.body[j] && (p.position[j] - p.position[i]).squaredNorm() < h * h)
         j_min = std::min(j_min, j);
       return false;
     });
     if (j_min == p.size()) continue;
     const std::size_t j = j_min;
     throw CaseError(fmt::format(
-        "{}: bodies '{}' and '{}' overlap: particles at {} and {} are closer than dp/2; expected bodies that at most "
-        "touch",
+        "{}: bodies '{}' and '{}' overlap: particles at {} and {} are closer than dp = {:g} m; "
+        "expected bodies that at most touch (bodies thinner than dp need a smaller dp)",
         spec.file, p.bodies[p.body[i]].name, p.bodies[p.body[j]].name, show_point(p.position[i]),
-        show_point(p.position[j])));
+        show_point(p.position[j]), spec.dp));
   }
 }
 

@@ -1264,6 +1264,25 @@ TEST(Scene, CoincidentWallParticlesAreRefused) {
   EXPECT_NO_THROW(build_scene(one, std::nullopt));
 }
 
+// Every body is on the case's lattice, so bodies that touch sit dp apart and a closer pair is refused: here a body
+// thinner than dp (0.2995-0.3048 m at dp 0.01 m holds no cell centre, so it keeps one cell from its low side, off the
+// lattice) beside water that ends at 0.2995 m puts two particles 0.95 dp apart.
+TEST(Scene, BodyThinnerThanDpBesideAnotherIsRefused) {
+  const std::string text = replaced(minimal_case, "max: [0.3, 0.3]", "max: [0.2995, 0.3]") +
+                           "  - {name: film, kind: fluid, material: water, rectangle: {min: [0.2995, 0.1], max: [0.3048, 0.3]}}\n";
+  try {
+    build_scene(parse_case(text, file_name), std::nullopt);
+    ADD_FAILURE() << "no error";
+  } catch (const CaseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("bodies 'block' and 'film' overlap: particles at (0.295, 0.105) and (0.3045, 0.105) "
+                                    "are closer than dp = 0.01 m; expected bodies that at most touch (bodies thinner "
+                                    "than dp need a smaller dp)"));
+  }
+  // Thicker than dp, it starts on the lattice, dp from the water.
+  const std::string thick = replaced(text, "max: [0.3048, 0.3]", "max: [0.3105, 0.3]");
+  EXPECT_NO_THROW(build_scene(parse_case(thick, file_name), std::nullopt));
+}
+
 // A block standing on the tank's floor: its two lower corner particles point at their side faces, not at the
 // corner on the floor (a fluid particle put back out of the corner cell would land in the seam between block and
 // floor); its upper corners and a free block's corners keep their diagonal offsets, its other particles theirs.
