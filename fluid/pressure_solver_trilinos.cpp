@@ -40,19 +40,9 @@ namespace mpsfsi {
 
 namespace {
 
-using Scalar = double;
-using Map = Tpetra::Map<>;
+using namespace trilinos_detail;  // the Tpetra types (Scalar, Map, MV, OP, LO, GO, Node) and the Eisenstat system
 using Matrix = Tpetra::CrsMatrix<Scalar>;
-using MV = Tpetra::MultiVector<Scalar>;
-using OP = Tpetra::Operator<Scalar>;
-using LO = Map::local_ordinal_type;
-using GO = Map::global_ordinal_type;
-using Node = Map::node_type;
-using Teuchos::RCP;
 using Teuchos::rcp;
-
-using trilinos_detail::CoarseLevel;
-using trilinos_detail::EisenstatSystem;
 
 static_assert(std::is_same<GO, GlobalId>::value, "GlobalId must match Tpetra's GlobalOrdinal");
 

@@ -92,6 +92,17 @@ bodies:
   - {name: block, kind: fluid, material: water, rectangle: {min: [0.1, 0.1], max: [0.3, 0.3]}}
 )";
 
+/// The smallest distance between two particles of different bodies, up to 1.5 dp (the neighbour list's reach).
+Real closest_of_different_bodies(const ParticleSet& p, const Real dp) {
+  NeighbourList nl;
+  build_neighbour_list(p.position, 1.5 * dp, nl);
+  Real closest = 1.5 * dp;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::size_t k = nl.begin(i); k < nl.end(i); ++k)
+      if (p.body[i] != p.body[nl.index[k]]) closest = std::min(closest, (p.position[nl.index[k]] - p.position[i]).norm());
+  return closest;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -1139,14 +1150,7 @@ TEST(Scene, BodiesThatTouchAreDpApartAtAnyDp) {
            {"elastic_gate", "0.002"}, {"dam_break_elastic_plate", "0.006"}}) {
     const CaseSpec spec = load_case(cases + name + ".yaml", {"dp=" + dp});
     const Scene scene = build_scene(spec);
-    const auto& p = scene.particles;
-    NeighbourList nl;
-    build_neighbour_list(p.position, 1.5 * spec.dp, nl);
-    Real closest = 1.5 * spec.dp;
-    for (std::size_t i = 0; i < p.size(); ++i)
-      for (std::size_t k = nl.begin(i); k < nl.end(i); ++k)
-        if (p.body[i] != p.body[nl.index[k]]) closest = std::min(closest, (p.position[nl.index[k]] - p.position[i]).norm());
-    EXPECT_NEAR(closest, spec.dp, 1e-9 * spec.dp) << name << " at dp " << dp;
+    EXPECT_NEAR(closest_of_different_bodies(scene.particles, spec.dp), spec.dp, 1e-9 * spec.dp) << name << " at dp " << dp;
   }
 }
 
@@ -1171,13 +1175,7 @@ TEST(Scene, RoundAndPolygonBodiesAreOnTheCaseLattice) {
       off = std::max(off, std::abs(f - std::round(f)));
     }
   EXPECT_LT(off, 1e-9);
-  NeighbourList nl;
-  build_neighbour_list(p.position, 1.5 * spec.dp, nl);
-  Real closest = 1.5 * spec.dp;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    for (std::size_t k = nl.begin(i); k < nl.end(i); ++k)
-      if (p.body[i] != p.body[nl.index[k]]) closest = std::min(closest, (p.position[nl.index[k]] - p.position[i]).norm());
-  EXPECT_NEAR(closest, spec.dp, 1e-9 * spec.dp);
+  EXPECT_NEAR(closest_of_different_bodies(p, spec.dp), spec.dp, 1e-9 * spec.dp);
   const ParticleCounts n = count_particles(spec);
   EXPECT_EQ(n.fluid, p.n_of_kind(ParticleKind::fluid));
   EXPECT_EQ(n.wall, p.n_of_kind(ParticleKind::wall));
