@@ -97,16 +97,16 @@ std::vector<Vec> fill_rectangle(const Vec& lo, const Vec& hi, const Real dp) {
 
 namespace {
 
-/// Checks the cylinder's arguments and calls f(x, s, r) for every lattice point x of fill_cylinder inside it,
-/// s its coordinate along the unit axis e from `base` and r = x - base - s e its offset from the axis.
-/// The first and last cells of the lattice anchored at `lo` (at lattice_corner(lo) with an origin) that cover
-/// the bounding box [lo, hi]; returns the anchor.
+/// The anchor of a shape's lattice, lo (or lattice_corner(lo) with an origin), and in `last` the last cell per
+/// axis of that lattice that covers the bounding box [lo, hi].
 Vec round_lattice(const Vec& lo, const Vec& hi, const Real dp, const std::optional<Vec>& origin, IVec& last) {
   const Vec anchor = origin ? lattice_corner(lo, *origin, dp) : lo;
   for (int a = 0; a < dim; ++a) last[a] = static_cast<int>(std::ceil((hi[a] - anchor[a]) / dp)) - 1;
   return anchor;
 }
 
+/// Checks the cylinder's arguments and calls f(x, s, r) for every lattice point x of fill_cylinder inside it,
+/// s its coordinate along the unit axis e from `base` and r = x - base - s e its offset from the axis.
 template <class F>
 void for_each_cylinder_point(const Vec& base, const Vec& axis, const Real radius, const Real dp,
                              const std::optional<Vec>& origin, F&& f) {

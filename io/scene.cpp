@@ -30,7 +30,6 @@ double round_volume(const RoundShape& s) {
   return (dim == 2 ? 2 * s.radius : pi * s.radius * s.radius) * s.axis.norm();
 }
 
-
 /// The signed distance of an obstacle wall's shape (block, sphere, cylinder, surface), for the bodies it is cut out of.
 SignedDistance wall_distance(const WallSpec& w) {
   if (w.type == WallType::surface) return ClosedSurface::distance_function(w.surface);
