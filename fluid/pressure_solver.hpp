@@ -61,7 +61,8 @@ struct LocalRows {
   std::vector<Real> rhs;              ///< size row_id.size()
   /// Coarse groups for the two-level SSOR: the group of each column (this rank's rows, then the remote
   /// columns), a key that names the same group on every rank (the fluid: a cell of a coarse grid over
-  /// space, cut by the ranks' regions). Empty: no coarse level.
+  /// space, cut by the ranks' regions). A group's rows are on one rank, its owner, and the keys order the
+  /// groups by owner first (all of rank r's keys below rank r + 1's). Empty: no coarse level.
   std::vector<std::int64_t> group;
   /// The solve may also stop when ||b - Ax||_2 (over all ranks) is at most this, whatever the relative
   /// tolerance says (0: off). The fluid sets it from fluid.density_tolerance.

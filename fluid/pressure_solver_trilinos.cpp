@@ -1,8 +1,8 @@
 // Trilinos implementation of the pressure solve (seed 004 eq. 23): the only translation unit that
 // includes Tpetra, Belos, MueLu and Ifpack2 (with fluid/eisenstat_system.hpp, its ssor / sgs system). The row
-// map is made of this rank's row ids (particle global ids) and the column map of these and the remote ids,
-// with an Import from the owners the caller names;
-// both are kept while the ids do not change. SSOR / SGS run CG on Eisenstat's split system (no Tpetra
+// map is made of this rank's row ids (particle global ids) and the column map of these and the remote ids (the
+// remote ids only for the Eisenstat system, which keeps its own rows apart), with an Import from the owners the
+// caller names; both are kept while the ids do not change. SSOR / SGS run CG on Eisenstat's split system (no Tpetra
 // matrix); the other preconditioners get a Tpetra::CrsMatrix made straight from the local CRS arrays
 // (Kokkos views + expertStaticFillComplete): Belos CG or GMRES with MueLu (coarse solver RELAXATION: the
 // default KLU2 coarse solve is wrong on 2 ranks in this build, see docs/architecture.md, ## Numerical choices)
@@ -395,9 +395,9 @@ class TrilinosPressureSolver final : public PressureSolver {
     }
     EisenstatSystem& E = *eis_;
     E.importer = importer_;
-    if (!importer_.is_null() && (E.t_col.is_null() || E.t_col->getMap() != col_map_)) {
+    if (!importer_.is_null() && (E.t_ghost.is_null() || E.t_ghost->getMap() != col_map_ || E.t_row->getMap() != row_map_)) {
       E.t_row = rcp(new MV(row_map_, 1));
-      E.t_col = rcp(new MV(col_map_, 1));
+      E.t_ghost = rcp(new MV(col_map_, 1));
     }
     // A re-solve with a few rows changed on the rows and columns of the last setup: those rows only.
     if (sys.values_only && eis_row_map_ == row_map_ && eis_col_map_ == col_map_ && E.size() == sys.n_rows()) {
@@ -410,8 +410,8 @@ class TrilinosPressureSolver final : public PressureSolver {
     precond_bytes_ = E.bytes();
   }
 
-  /// Row map (this rank's row ids) and vectors, column map (the row ids, then the remote ids) and Import,
-  /// each made anew only when it changed on some rank.
+  /// Row map (this rank's row ids) and vectors, column map (the row ids, then the remote ids; the Eisenstat
+  /// system: the remote ids only) and Import, each made anew only when it changed on some rank.
   void update_maps(const LocalRows& sys) {
     int changed[2] = {row_map_.is_null() || sys.row_id != row_ids_ ? 1 : 0,
                       sys.remote_id != remote_ids_ ? 1 : 0};
@@ -436,7 +436,8 @@ class TrilinosPressureSolver final : public PressureSolver {
     }
     if (changed[0] || changed[1]) {
       remote_ids_ = sys.remote_id;
-      col_ids_ = row_ids_;
+      col_ids_.clear();
+      if (!eisenstat_) col_ids_ = row_ids_;
       col_ids_.insert(col_ids_.end(), remote_ids_.begin(), remote_ids_.end());
       col_map_ = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
                              Teuchos::ArrayView<const GO>(col_ids_.data(), static_cast<int>(col_ids_.size())), 0, comm_));

@@ -39,10 +39,11 @@ LocalRows split_system(const LocalRows& whole, const int rank, const int n_ranks
       s.remote_id.push_back(whole.row_id[c]);
       s.remote_rank.push_back(rank_of(c));
     }
-  if (!whole.group.empty()) {  // the groups of the own rows, then of the remote columns
-    s.group.assign(whole.group.begin() + static_cast<std::ptrdiff_t>(begin), whole.group.begin() + static_cast<std::ptrdiff_t>(end));
+  if (!whole.group.empty()) {  // the groups of the own rows, then of the remote columns, cut by the blocks
+    const auto key = [&](const std::size_t c) { return (static_cast<std::int64_t>(rank_of(c)) << 44) + whole.group[c]; };
+    for (std::size_t c = begin; c < end; ++c) s.group.push_back(key(c));
     for (std::size_t c = 0; c < n; ++c)
-      if (local_of[c] >= n_own) s.group.push_back(whole.group[c]);
+      if (local_of[c] >= n_own) s.group.push_back(key(c));
   }
   s.row_ptr.assign(1, 0);
   std::vector<std::pair<LocalIndex, Real>> row;
