@@ -304,8 +304,9 @@ struct CoarseLevel {
     const std::vector<std::int64_t> ranges = all_gather(comm, std::vector<std::int64_t>{first_own, n_own});
     std::int64_t covered = 0;
     for (std::size_t r = 0; r + 1 < ranges.size(); r += 2) covered += ranges[r + 1];
-    if (covered != m || std::count(owned.begin(), owned.end(), 1) != n_own)
-      throw std::logic_error("pressure solve (ssor): coarse groups must each hold the rows of one rank, ordered by rank");
+    int split = covered != m || std::count(owned.begin(), owned.end(), 1) != n_own ? 1 : 0;
+    if (n_ranks > 1) MPI_Allreduce(MPI_IN_PLACE, &split, 1, MPI_INT, MPI_MAX, comm);  // every rank throws alike
+    if (split) throw std::logic_error("pressure solve (ssor): coarse groups must each hold the rows of one rank, ordered by rank");
     std::vector<char> in_iface(static_cast<std::size_t>(m), 0);
     std::vector<std::int64_t> mine;  // the own groups coupled to other ranks', and the groups they meet there
     for (std::size_t q = 0; q < row_k.size(); ++q)

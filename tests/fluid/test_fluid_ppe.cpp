@@ -4,6 +4,7 @@
 // own tests are in test_fluid_projection.cpp.
 #include "core/distribution.hpp"
 #include "core/kernel.hpp"
+#include "fluid/coarse_level.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "fluid/pressure_solver.hpp"
 #include "io/case.hpp"
@@ -11,9 +12,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
+#include <tuple>
 
 using namespace mpsfsi;
 
@@ -359,4 +362,82 @@ TEST(PressureSolve, RejectsUnknownChoices) {
   PressureSolverSettings settings;
   settings.preconditioner = static_cast<Preconditioner>(99);  // no such preconditioner
   EXPECT_THROW(make_pressure_solver(settings, MPI_COMM_WORLD), std::invalid_argument);
+}
+
+namespace {
+/// The 5-point model system on an m x m grid in groups of 4 x 4 points (split_system adds each row's rank to its
+/// key), this rank's block, and its coarse level set up and factorised.
+LocalRows coarse_model_block(const int m, trilinos_detail::CoarseLevel& coarse, const bool owner_in_key = true) {
+  int rank = 0, n_ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
+  LocalRows whole;
+  whole.row_ptr.push_back(0);
+  for (int r = 0; r < m * m; ++r) {
+    whole.row_id.push_back(r);
+    const int ix = r % m, iy = r / m;
+    whole.group.push_back(static_cast<std::int64_t>(iy / 4) * 1000 + ix / 4);
+    for (const auto& [jx, jy, v] : {std::tuple{ix, iy - 1, -1.0}, {ix - 1, iy, -1.0}, {ix, iy, 4.01}, {ix + 1, iy, -1.0}, {ix, iy + 1, -1.0}})
+      if (jx >= 0 && jy >= 0 && jx < m && jy < m) {
+        whole.col.push_back(jy * m + jx);
+        whole.value.push_back(v);
+      }
+    whole.row_ptr.push_back(whole.col.size());
+    whole.rhs.push_back(0);
+  }
+  LocalRows s = split_system(whole, rank, n_ranks);
+  if (!owner_in_key)
+    for (auto& key : s.group) key &= (std::int64_t{1} << 44) - 1;
+  coarse.set_groups(s, MPI_COMM_WORLD, n_ranks);
+  for (std::size_t i = 0; i < s.n_rows(); ++i)
+    coarse.add_row(&s.col[s.row_ptr[i]], &s.value[s.row_ptr[i]], s.row_ptr[i + 1] - s.row_ptr[i]);
+  coarse.factorise();
+  return s;
+}
+}  // namespace
+
+// The coarse level factorised apart by rank (the interiors on their ranks, the Schur complement of the groups
+// along the cuts on every rank) solves E x = v: on every rank, each own group's row of E = Z^T (A Z) applied to
+// the x the solve gives (own groups and the interface) returns v to round-off.
+TEST(PressureSolve, CoarseLevelSolvesTheCoarseMatrix) {
+  trilinos_detail::CoarseLevel coarse;
+  coarse_model_block(36, coarse);
+  ASSERT_GE(coarse.m, 81);  // 9 x 9 groups, more where the ranks' blocks cut them
+  // v on each group's owner (the other ranks add 0 there), v_k = sin(k + 1).
+  std::vector<double> x(static_cast<std::size_t>(coarse.m), 0.0);
+  for (const int k : coarse.of_row)
+    if (k >= 0) x[static_cast<std::size_t>(k)] = std::sin(k + 1.0);
+  coarse.solve(x);
+  std::vector<double> ex(static_cast<std::size_t>(coarse.m), 0.0);  // the own groups' rows of E x
+  for (std::size_t i = 0; i < coarse.of_row.size(); ++i)
+    if (coarse.of_row[i] >= 0)
+      ex[static_cast<std::size_t>(coarse.of_row[i])] += coarse.az.row_dot(i, x.data());
+  double worst = 0;
+  int n_checked = 0;
+  for (int k = 0; k < coarse.m; ++k)
+    if (std::find(coarse.of_row.begin(), coarse.of_row.end(), k) != coarse.of_row.end()) {
+      worst = std::max(worst, std::abs(ex[static_cast<std::size_t>(k)] - std::sin(k + 1.0)));
+      ++n_checked;
+    }
+  int n_ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
+  MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, &n_checked, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(n_checked, coarse.m);  // every group checked once, on its owner
+  EXPECT_LT(worst, 1e-12);
+  if (n_ranks > 1) {
+    EXPECT_FALSE(coarse.iface.empty());
+  }
+}
+
+// A group whose rows are on two ranks breaks the coarse level's contract (LocalRows::group): every rank throws.
+TEST(PressureSolve, CoarseGroupsOnTwoRanksAreRefused) {
+  int n_ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
+  trilinos_detail::CoarseLevel coarse;
+  if (n_ranks == 1) {
+    EXPECT_NO_THROW(coarse_model_block(38, coarse, false));
+    return;
+  }
+  EXPECT_THROW(coarse_model_block(38, coarse, false), std::logic_error);  // 38 x 38 rows in 2-4 blocks cut groups
 }
