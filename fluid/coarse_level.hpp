@@ -71,14 +71,15 @@ struct CoarseLevel {
   std::vector<int> iface;     ///< Gamma: the groups of all ranks coupled to another rank's group, ascending
   std::vector<int> iface_of;  ///< coarse index -> index in iface, or -1
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<Scalar>> schur;  ///< S on Gamma, the same on every rank
-  std::vector<int> local_ptr, local_index, schur_ptr, schur_index;  ///< the patterns the orderings were made for
+  std::vector<int> interior_ptr, interior_index, local_ptr, local_index, schur_ptr, schur_index;  ///< the patterns the orderings were made for
+  std::vector<int> interior_perm;  ///< interior group (interior-local) -> its place, AMD on the interior pattern
   Eigen::VectorXd local_d;  ///< D of the local factor
   mutable std::vector<Scalar> y, gamma;
 
   std::size_t bytes() const {
     return az.bytes() + (of_row.capacity() + of_col.capacity() + iface_of.capacity()) * sizeof(int) +
            (g.capacity() + y.capacity()) * sizeof(Scalar) +
-           local_index.capacity() * (sizeof(Scalar) + sizeof(int));
+           static_cast<std::size_t>(n_own > 0 ? local.matrixL().nestedExpression().nonZeros() : 0) * (sizeof(Scalar) + sizeof(int));
   }
 
   /// The coarse index of every column of `sys` (of_col) and row (of_row): the groups of all ranks' rows
@@ -320,7 +321,8 @@ struct CoarseLevel {
         iface_of[static_cast<std::size_t>(k)] = static_cast<int>(iface.size());
         iface.push_back(k);
       }
-    // The interior block's pattern (interior-local indices), ordered by AMD as Eigen's LDL^T would.
+    // The interior block's pattern (interior-local indices), ordered by AMD as Eigen's LDL^T would (again only
+    // when the pattern changed).
     std::vector<int> interior_of(static_cast<std::size_t>(n_own), -1);
     std::vector<int> interior;
     for (int k = 0; k < n_own; ++k)
@@ -340,11 +342,15 @@ struct CoarseLevel {
     if (n_interior > 0) {
       Eigen::SparseMatrix<Scalar> lower(n_interior, n_interior), full;
       lower.setFromTriplets(t.begin(), t.end());
-      full = lower.selfadjointView<Eigen::Lower>();
-      Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
-      Eigen::AMDOrdering<int>()(full, pinv);
-      const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm = pinv.inverse();
-      for (int a = 0; a < n_interior; ++a) position[static_cast<std::size_t>(interior[static_cast<std::size_t>(a)])] = perm.indices()(a);
+      if (!has_pattern(lower, interior_ptr, interior_index)) {
+        full = lower.selfadjointView<Eigen::Lower>();
+        Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
+        Eigen::AMDOrdering<int>()(full, pinv);
+        const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm = pinv.inverse();
+        interior_perm.assign(perm.indices().data(), perm.indices().data() + n_interior);
+      }
+      for (int a = 0; a < n_interior; ++a)
+        position[static_cast<std::size_t>(interior[static_cast<std::size_t>(a)])] = interior_perm[static_cast<std::size_t>(a)];
     }
     int next = n_interior;
     for (int k = 0; k < n_own; ++k)

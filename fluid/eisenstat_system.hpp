@@ -43,14 +43,14 @@ using Teuchos::RCP;
 /// The block is symmetric (eq. 23's pair weights), so only L is stored: the forward sweep reads its rows
 /// as dot products, the backward sweep reads them last one first and scatters each finished unknown into
 /// the earlier rows (column-oriented L^T). Half the matrix is stored and both sweeps stream through the
-/// same arrays. O is kept on the rows that have couplings to other ranks only (`other_row`), its columns the
-/// index among the remote ids (LocalRows::remote_id), whose values one Tpetra import brings straight from the
-/// owners into `t_ghost`. No Tpetra matrix is built on this path.
+/// same arrays. O's columns index the remote ids (LocalRows::remote_id), whose values one Tpetra import brings
+/// straight from the owners into `t_ghost`; `other_row` lists the rows it is not empty on. No Tpetra matrix is
+/// built on this path.
 class EisenstatSystem final : public OP {
  public:
   CrsBlock lower;  ///< L: columns are this rank's row indices
-  CrsBlock other;  ///< O on the rows of other_row: columns index the remote ids
-  std::vector<int> other_row;  ///< the rows with couplings to other ranks, ascending
+  CrsBlock other;  ///< O: columns index the remote ids
+  std::vector<int> other_row;  ///< the rows with couplings to other ranks (O not empty), ascending
   CoarseLevel coarse;
   std::vector<Scalar> diag, inv_dprime, sqrt_dprime, d_minus_2dprime;
   RCP<const Map> row_map;
@@ -58,7 +58,6 @@ class EisenstatSystem final : public OP {
   RCP<MV> t_row, t_ghost;  ///< with importer: the vector to import from (t's storage) and the remote values
   mutable std::vector<Scalar> t, z;
   std::vector<std::size_t> diag_pos_;  ///< set_rows: each row's first entry at or after the diagonal
-  std::vector<int> other_of_row_;      ///< each row's index in other_row, or -1
 
   RCP<const Map> getDomainMap() const override { return row_map; }
   RCP<const Map> getRangeMap() const override { return row_map; }
@@ -75,7 +74,7 @@ class EisenstatSystem final : public OP {
     const auto n_own = static_cast<LocalIndex>(n);
     // Each row is sorted: L's columns (c < i), the diagonal, U's (i < c < n), then other ranks' (c >= n).
     lower.ptr.resize(n + 1);
-    other.clear();
+    other.ptr.resize(n + 1);
     other_row.clear();
     std::vector<std::size_t>& diag_at = diag_pos_;
     diag_at.resize(n);
@@ -87,16 +86,13 @@ class EisenstatSystem final : public OP {
       const LocalIndex* o = std::lower_bound(d, e, n_own);
       diag_at[i] = static_cast<std::size_t>(d - sys.col.data());
       lower.ptr[i + 1] = lower.ptr[i] + static_cast<int>(d - b);
-      if (o == e) continue;
-      other_row.push_back(static_cast<int>(i));
-      for (; o < e; ++o) other.col.push_back(*o - n_own);
-      other.ptr.push_back(static_cast<int>(other.col.size()));
+      other.ptr[i + 1] = other.ptr[i] + static_cast<int>(e - o);
+      if (o != e) other_row.push_back(static_cast<int>(i));
     }
-    other.val.resize(other.col.size());
-    other_of_row_.assign(n, -1);
-    for (std::size_t b = 0; b < other_row.size(); ++b) other_of_row_[static_cast<std::size_t>(other_row[b])] = static_cast<int>(b);
     resize_with_headroom(lower.col, static_cast<std::size_t>(lower.ptr[n]));
     resize_with_headroom(lower.val, lower.col.size());
+    resize_with_headroom(other.col, static_cast<std::size_t>(other.ptr[n]));
+    resize_with_headroom(other.val, other.col.size());
     diag.resize(n);
     inv_dprime.resize(n);
     sqrt_dprime.resize(n);
@@ -105,7 +101,10 @@ class EisenstatSystem final : public OP {
       const std::size_t k0 = sys.row_ptr[i], k1 = sys.row_ptr[i + 1];
       if (coarse.m > 0) coarse.add_row(&sys.col[k0], &sys.value[k0], k1 - k0);
       const std::size_t n_lower = static_cast<std::size_t>(lower.ptr[i + 1] - lower.ptr[i]);
+      const std::size_t n_other = static_cast<std::size_t>(other.ptr[i + 1] - other.ptr[i]);
       std::copy_n(&sys.col[k0], n_lower, &lower.col[static_cast<std::size_t>(lower.ptr[i])]);
+      for (std::size_t q = 0; q < n_other; ++q)  // remote column c >= n_own is remote id c - n_own
+        other.col[static_cast<std::size_t>(other.ptr[i]) + q] = sys.col[k1 - n_other + q] - n_own;
       set_row_values(sys, i, omega);
     }
     if (coarse.m > 0) coarse.factorise();
@@ -127,11 +126,9 @@ class EisenstatSystem final : public OP {
   void set_row_values(const LocalRows& sys, const std::size_t i, const Scalar omega) {
     const std::size_t k0 = sys.row_ptr[i], k1 = sys.row_ptr[i + 1];
     const std::size_t n_lower = static_cast<std::size_t>(lower.ptr[i + 1] - lower.ptr[i]);
+    const std::size_t n_other = static_cast<std::size_t>(other.ptr[i + 1] - other.ptr[i]);
     std::copy_n(&sys.value[k0], n_lower, &lower.val[static_cast<std::size_t>(lower.ptr[i])]);
-    if (const int b = other_of_row_[i]; b >= 0) {
-      const auto n_other = static_cast<std::size_t>(other.ptr[b + 1] - other.ptr[b]);
-      std::copy_n(&sys.value[k1 - n_other], n_other, &other.val[static_cast<std::size_t>(other.ptr[b])]);
-    }
+    std::copy_n(&sys.value[k1 - n_other], n_other, &other.val[static_cast<std::size_t>(other.ptr[i])]);
     diag[i] = 0;
     for (std::size_t k = diag_pos_[i]; k < k1 && sys.col[k] == static_cast<LocalIndex>(i); ++k) diag[i] += sys.value[k];
     if (!(diag[i] > 0))
@@ -205,7 +202,7 @@ class EisenstatSystem final : public OP {
     std::copy(b, b + n, r);
     for (std::size_t i = 0; i < n; ++i) {
       Scalar ax = diag[i] * x[i] + lower.row_dot(i, x);
-      if (const int o = xc ? other_of_row_[i] : -1; o >= 0) ax += other.row_dot(static_cast<std::size_t>(o), xc);
+      if (xc) ax += other.row_dot(i, xc);
       r[i] -= ax;
       scatter_lower(i, x[i], r);  // the L^T x part
     }
@@ -239,7 +236,7 @@ class EisenstatSystem final : public OP {
         }
       }
       if (const Scalar* tc = import_t_row())  // s += O t (couplings to the other ranks' rows)
-        for (std::size_t b = 0; b < other_row.size(); ++b) zp[other_row[b]] += other.row_dot(b, tc);
+        for (const int i : other_row) zp[i] += other.row_dot(static_cast<std::size_t>(i), tc);
       // Deflation: s -= A Z E^-1 Z^T A t (with the forward sweep below: P Ah v, P = I - Ah Zh E^-1 Zh^T,
       // Zh = S^-T Z).
       const Scalar* cg = nullptr;

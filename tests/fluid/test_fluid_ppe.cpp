@@ -16,7 +16,6 @@
 #include <cmath>
 #include <map>
 #include <random>
-#include <tuple>
 
 using namespace mpsfsi;
 
@@ -149,25 +148,16 @@ class PressureSolve : public ::testing::TestWithParam<std::pair<const char*, con
 };
 
 namespace {
-/// Solves the shifted 5-point system below with `settings` and `absolute_tolerance`; returns the
-/// solver's result and the true ||b - Ax|| / ||b|| recomputed from the CRS arrays. With `coarse` > 0 the
-/// rows are in groups of coarse x coarse grid points (the two-level sgs / ssor); with `dirichlet_top` the
-/// top row of points are identity rows, dropped from the other rows (like the free surface).
-std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSettings& settings,
-                                                         const Real absolute_tolerance, Real* b_norm = nullptr,
-                                                         const int coarse = 0, const bool dirichlet_top = false) {
-  auto solver = make_pressure_solver(settings, MPI_COMM_WORLD);
-  int rank = 0, n_ranks = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
-  const int m = 40;
-  const std::size_t n = static_cast<std::size_t>(m * m);
-  // The whole system (row ids 1000 + 3 r: ids are names, not positions), then this rank's block.
+/// The shifted 5-point system on an m x m grid held whole (row ids 1000 + 3 r: ids are names, not positions),
+/// right-hand side uniform in [-1, 1]. With `coarse` > 0 the rows are in groups of coarse x coarse grid points;
+/// with `dirichlet_top` the top row of points are identity rows, dropped from the other rows (like the free
+/// surface).
+LocalRows model_system(const int m, const int coarse, const bool dirichlet_top) {
   LocalRows whole;
   whole.row_ptr.push_back(0);
   std::mt19937 rng(3);
   std::uniform_real_distribution<Real> u(-1, 1);
-  for (std::size_t r = 0; r < n; ++r) {
+  for (std::size_t r = 0; r < static_cast<std::size_t>(m * m); ++r) {
     whole.row_id.push_back(1000 + 3 * static_cast<GlobalId>(r));
     const int ix = static_cast<int>(r) % m, iy = static_cast<int>(r) / m;
     if (coarse > 0) whole.group.push_back(static_cast<std::int64_t>(iy / coarse) * 1000 + ix / coarse);
@@ -189,6 +179,23 @@ std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSet
     whole.row_ptr.push_back(whole.col.size());
     whole.rhs.push_back(u(rng));
   }
+  return whole;
+}
+
+/// Solves model_system(40, coarse, dirichlet_top) with `settings` and `absolute_tolerance`; returns the
+/// solver's result and the true ||b - Ax|| / ||b|| recomputed from the CRS arrays. With `coarse` > 0 the
+/// rows are in groups of coarse x coarse grid points (the two-level sgs / ssor); with `dirichlet_top` the
+/// top row of points are identity rows, dropped from the other rows (like the free surface).
+std::pair<PressureSolveResult, Real> solve_model_problem(const PressureSolverSettings& settings,
+                                                         const Real absolute_tolerance, Real* b_norm = nullptr,
+                                                         const int coarse = 0, const bool dirichlet_top = false) {
+  auto solver = make_pressure_solver(settings, MPI_COMM_WORLD);
+  int rank = 0, n_ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
+  const int m = 40;
+  const std::size_t n = static_cast<std::size_t>(m * m);
+  const LocalRows whole = model_system(m, coarse, dirichlet_top);
   LocalRows s = split_system(whole, rank, n_ranks);
   s.absolute_tolerance = absolute_tolerance;
   std::vector<Real> x(s.n_rows(), 0.0);
@@ -365,27 +372,13 @@ TEST(PressureSolve, RejectsUnknownChoices) {
 }
 
 namespace {
-/// The 5-point model system on an m x m grid in groups of 4 x 4 points (split_system adds each row's rank to its
-/// key), this rank's block, and its coarse level set up and factorised.
+/// model_system on an m x m grid in groups of 4 x 4 points (split_system adds each row's rank to the keys):
+/// this rank's block, and its coarse level set up and factorised.
 LocalRows coarse_model_block(const int m, trilinos_detail::CoarseLevel& coarse, const bool owner_in_key = true) {
   int rank = 0, n_ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &n_ranks);
-  LocalRows whole;
-  whole.row_ptr.push_back(0);
-  for (int r = 0; r < m * m; ++r) {
-    whole.row_id.push_back(r);
-    const int ix = r % m, iy = r / m;
-    whole.group.push_back(static_cast<std::int64_t>(iy / 4) * 1000 + ix / 4);
-    for (const auto& [jx, jy, v] : {std::tuple{ix, iy - 1, -1.0}, {ix - 1, iy, -1.0}, {ix, iy, 4.01}, {ix + 1, iy, -1.0}, {ix, iy + 1, -1.0}})
-      if (jx >= 0 && jy >= 0 && jx < m && jy < m) {
-        whole.col.push_back(jy * m + jx);
-        whole.value.push_back(v);
-      }
-    whole.row_ptr.push_back(whole.col.size());
-    whole.rhs.push_back(0);
-  }
-  LocalRows s = split_system(whole, rank, n_ranks);
+  LocalRows s = split_system(model_system(m, 4, false), rank, n_ranks);
   if (!owner_in_key)
     for (auto& key : s.group) key &= (std::int64_t{1} << 44) - 1;
   coarse.set_groups(s, MPI_COMM_WORLD, n_ranks);
