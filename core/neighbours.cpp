@@ -3,6 +3,7 @@
 #include "core/neighbours.hpp"
 
 #include "core/buffers.hpp"
+#include "core/kernel.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -11,10 +12,12 @@
 
 namespace mpsfsi {
 
-void CellGrid::build(const std::vector<Vec>& x, const Real cell_size) {
+void CellGrid::build(const std::vector<Vec>& x, const Real cell_size, const std::vector<std::uint8_t>* include) {
   if (!(cell_size > 0)) throw std::invalid_argument("CellGrid: cell size must be positive");
   cell_size_ = cell_size;
   const std::size_t n = x.size();
+  assert(!include || include->size() >= n);
+  const auto binned = [&](const std::size_t i) { return !include || (*include)[i] != 0; };
   Vec lo = Vec::Constant(0), hi = Vec::Constant(0);
   if (n > 0) {
     lo = hi = x[0];
@@ -43,15 +46,17 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size) {
   for (std::size_t i = 0; i < n; ++i) {
     const auto ci = static_cast<LocalIndex>(cell_index(cell_of(x[i])));
     cell_of_point_[i] = ci;
-    ++cell_start_[static_cast<std::size_t>(ci) + 1];
+    if (binned(i)) ++cell_start_[static_cast<std::size_t>(ci) + 1];
   }
   for (std::size_t c = 0; c < n_total; ++c) cell_start_[c + 1] += cell_start_[c];
-  resize_with_headroom(sorted_, n);
+  const std::size_t n_binned = cell_start_[n_total];
+  resize_with_headroom(sorted_, n_binned);
   // Stable counting sort: points keep increasing index order inside a cell.
   std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) sorted_[fill[static_cast<std::size_t>(cell_of_point_[i])]++] = static_cast<LocalIndex>(i);
-  resize_with_headroom(sorted_x_, n);
-  for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[static_cast<std::size_t>(sorted_[k])];
+  for (std::size_t i = 0; i < n; ++i)
+    if (binned(i)) sorted_[fill[static_cast<std::size_t>(cell_of_point_[i])]++] = static_cast<LocalIndex>(i);
+  resize_with_headroom(sorted_x_, n_binned);
+  for (std::size_t k = 0; k < n_binned; ++k) sorted_x_[k] = x[static_cast<std::size_t>(sorted_[k])];
 }
 
 CellGrid::Cell CellGrid::cell_of(const Vec& x) const {
@@ -85,12 +90,17 @@ __attribute__((noinline)) void sort_short_list(LocalIndex* a, const std::size_t 
 
 /// The rows of a neighbour list: row q holds the neighbours of point particle_of(q) among all points x,
 /// found in the (2 reach + 1)^d cells around it of `grid` (built over x with cells of side radius / reach).
-template <class ParticleOf>
-void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& particle_of, const Real radius,
-               const int reach, NeighbourList& out, const CellGrid& grid, const bool sorted_lists) {
+/// Rows q with has_row(q) false stay empty. With `support_only`, the pairs in_support of radius (core/kernel.hpp),
+/// by the same arithmetic. take_row(i, n_pairs) may write point i's row itself (appending at n_pairs, which it
+/// advances) and return true; otherwise the row is searched.
+template <bool support_only, class ParticleOf, class HasRow, class TakeRow>
+void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& particle_of, HasRow&& has_row,
+               TakeRow&& take_row, const Real radius, const int reach, NeighbourList& out, const CellGrid& grid,
+               const bool sorted_lists) {
   const Real r2 = radius * radius;
+  const Real support2 = radius * radius * (1.0 - support_margin);
   out.radius = radius;
-  out.support_only = false;
+  out.support_only = support_only;
   out.offset.resize(n + 1);
   // The index keeps last step's size (the list length changes little from step to step) and grows
   // below when needed; it is not trimmed (n_pairs() = offset.back()).
@@ -102,7 +112,15 @@ void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& part
   for (int a = 0; a < dim; ++a) n_cells[a] = grid.n_cells(a);
   std::size_t n_pairs = 0;
   for (std::size_t q = 0; q < n; ++q) {
+    if (!has_row(q)) {
+      out.offset[q + 1] = n_pairs;
+      continue;
+    }
     const std::size_t i = particle_of(q);
+    if (take_row(i, n_pairs)) {
+      out.offset[q + 1] = n_pairs;
+      continue;
+    }
     const Vec xi = x[i];
     const CellGrid::Cell c = grid.cell_of_point(i);
     // Stencil bounds per axis, clipped to the grid.
@@ -122,12 +140,20 @@ void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& part
       const std::size_t last = grid.cell_start(cell + row_length);
       if (n_pairs + (last - first) > out.index.size()) out.index.resize(2 * (n_pairs + (last - first)) + 1024);
       LocalIndex* dst = out.index.data() + n_pairs;
+      // Branch-free append: write always, advance only for a neighbour. The write comes after the distance's
+      // loads (written before them, it can stall them: the list and the positions are different arrays, but
+      // the loads wait for the store).
       for (std::size_t k = first; k < last; ++k) {
-        Real d2 = (xs[k][0] - xi[0]) * (xs[k][0] - xi[0]);
-        for (int a = 1; a < dim; ++a) d2 += (xs[k][a] - xi[a]) * (xs[k][a] - xi[a]);
-        // Branch-free append: write always, advance only for a neighbour.
-        *dst = sorted[k];
-        dst += (d2 < r2) & (static_cast<std::size_t>(sorted[k]) != i);
+        if constexpr (support_only) {
+          const Real d2 = (xs[k] - xi).squaredNorm();
+          *dst = sorted[k];
+          dst += (d2 > 0) & (d2 < support2);
+        } else {
+          Real d2 = (xs[k][0] - xi[0]) * (xs[k][0] - xi[0]);
+          for (int a = 1; a < dim; ++a) d2 += (xs[k][a] - xi[a]) * (xs[k][a] - xi[a]);
+          *dst = sorted[k];
+          dst += (d2 < r2) & (static_cast<std::size_t>(sorted[k]) != i);
+        }
       }
       n_pairs = static_cast<std::size_t>(dst - out.index.data());
       int a = 1;
@@ -149,15 +175,57 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
   constexpr int reach = 2;  // cells of side radius / reach; stencil of (2 reach + 1)^d cells
   assert(!n_rows || *n_rows <= x.size());
   grid.build(x, radius / reach);
-  fill_rows(x, n_rows.value_or(x.size()), [](const std::size_t q) { return q; }, radius, reach, out, grid, sorted_lists);
+  fill_rows<false>(x, n_rows.value_or(x.size()), [](const std::size_t q) { return q; }, [](std::size_t) { return true; },
+                   [](std::size_t, std::size_t&) { return false; }, radius, reach, out, grid, sorted_lists);
+}
+
+void build_neighbour_list_masked(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
+                                 const std::size_t n_rows, const std::vector<std::uint8_t>& rows,
+                                 const std::vector<std::uint8_t>& candidates, const Real cell_size,
+                                 const bool support_only, const WiderRows* wider) {
+  if (n_rows > x.size() || rows.size() < n_rows || candidates.size() < x.size())
+    throw std::logic_error("build_neighbour_list_masked: masks shorter than the points");
+  if (!(cell_size > 0 && cell_size <= radius))
+    throw std::logic_error("build_neighbour_list_masked: the cell side must be in (0, radius]");
+  if (wider && (!support_only || &wider->list == &out || wider->rows.size() < wider->list.n_particles() ||
+                !(wider->list.radius >= radius)))
+    throw std::logic_error("build_neighbour_list_masked: rows from a wider list need support_only, another list at "
+                           "a radius of at least this one, and a mask of its rows");
+  const int reach = static_cast<int>(std::ceil(radius / cell_size));  // the cells that cover the radius
+  grid.build(x, cell_size, &candidates);
+  const auto particle_of = [](const std::size_t q) { return q; };
+  const auto has_row = [&](const std::size_t q) { return rows[q] != 0; };
+  if (!support_only) {
+    fill_rows<false>(x, n_rows, particle_of, has_row, [](std::size_t, std::size_t&) { return false; }, radius, reach,
+                     out, grid, true);
+    return;
+  }
+  const Real support2 = radius * radius * (1.0 - support_margin);  // in_support's arithmetic
+  const auto from_wider = [&](const std::size_t i, std::size_t& n_pairs) {
+    if (!wider || i >= wider->list.n_particles() || wider->rows[i] == 0) return false;
+    const NeighbourList& w = wider->list;
+    if (n_pairs + w.count(i) > out.index.size()) out.index.resize(2 * (n_pairs + w.count(i)) + 1024);
+    LocalIndex* dst = out.index.data() + n_pairs;
+    const Vec xi = x[i];
+    for (std::size_t k = w.begin(i); k < w.end(i); ++k) {
+      const auto j = static_cast<std::size_t>(w.index[k]);
+      const Real d2 = (x[j] - xi).squaredNorm();
+      *dst = w.index[k];
+      dst += (candidates[j] != 0) & (d2 > 0) & (d2 < support2);
+    }
+    n_pairs = static_cast<std::size_t>(dst - out.index.data());
+    return true;
+  };
+  fill_rows<true>(x, n_rows, particle_of, has_row, from_wider, radius, reach, out, grid, true);
 }
 
 void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, const Real radius,
                              NeighbourList& out, CellGrid& grid) {
   constexpr int reach = 1;  // few rows: cells of side radius, a 3^d stencil, no finer grid to build
   grid.build(x, radius);
-  fill_rows(x, rows.size(), [&](const std::size_t q) { return static_cast<std::size_t>(rows[q]); }, radius, reach, out,
-            grid, false);
+  fill_rows<false>(x, rows.size(), [&](const std::size_t q) { return static_cast<std::size_t>(rows[q]); },
+                   [](std::size_t) { return true; }, [](std::size_t, std::size_t&) { return false; }, radius, reach,
+                   out, grid, false);
 }
 
 void build_neighbour_list(const std::vector<Vec>& x, const Real radius, NeighbourList& out) {

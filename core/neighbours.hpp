@@ -7,6 +7,7 @@
 
 #include "core/types.hpp"
 
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -40,8 +41,9 @@ class CellGrid {
   /// Cell coordinates, one per axis.
   using Cell = IVec;
 
-  /// Bin the points into cells of side `cell_size` (> 0).
-  void build(const std::vector<Vec>& x, Real cell_size);
+  /// Bin the points into cells of side `cell_size` (> 0); with `include`, only the points i with include[i] != 0
+  /// (the others are in no cell, and cell_of_point() holds their cell all the same).
+  void build(const std::vector<Vec>& x, Real cell_size, const std::vector<std::uint8_t>* include = nullptr);
 
   Real cell_size() const { return cell_size_; }
   int n_cells(const int axis) const { return n_cells_[axis]; }
@@ -89,6 +91,26 @@ class CellGrid {
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid,
                           bool sorted = true, std::optional<std::size_t> n_rows = std::nullopt);
 void build_neighbour_list(const std::vector<Vec>& x, Real radius, NeighbourList& out);
+/// Rows that a list of a larger radius holds already (build_neighbour_list_masked): its rows i with rows[i] != 0
+/// (rows beyond its size are searched).
+struct WiderRows {
+  const NeighbourList& list;
+  const std::vector<std::uint8_t>& rows;
+};
+
+/// As build_neighbour_list (sorted rows), with rows only for the points i < n_rows with rows[i] != 0 (the other
+/// rows empty) and neighbours only among the points j with candidates[j] != 0: e.g. a wide list for the few
+/// particles whose operator needs it, or the pairs of the particles that take part. Cells of side `cell_size`
+/// (at most radius; a stencil of (2 ceil(radius / cell_size) + 1)^d cells): lists of several radii built with
+/// one cell side come out nearly sorted for particles kept in the cell_order of that side. With `support_only`,
+/// the pairs inside the operators' support of `radius` (in_support, core/kernel.hpp; out.support_only set), and
+/// with `wider` (support_only only) the rows that it holds are its rows filtered instead of searched: the same
+/// rows when the wider list's radius covers `radius` plus twice the largest displacement of any point since it
+/// was built, which the caller checks; sorted rows if its rows are.
+void build_neighbour_list_masked(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid,
+                                 std::size_t n_rows, const std::vector<std::uint8_t>& rows,
+                                 const std::vector<std::uint8_t>& candidates, Real cell_size,
+                                 bool support_only = false, const WiderRows* wider = nullptr);
 /// The neighbours of a few points only: row q of `out` lists every j != rows[q] with |x_j - x_rows[q]| <
 /// radius, in cell order (e.g. the solid surface particles whose fluid load is summed). Cells of side radius.
 void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, Real radius,

@@ -44,7 +44,6 @@ FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distributi
   dp = setup.dp;
   re_g = fluid.re_gradient * dp;
   re_l = fluid.re_laplacian * dp;
-  r_max = std::max(re_g, re_l);
   lat_g = lattice_constants(dp, re_g);
   lat_l = lattice_constants(dp, re_l);
   beta1 = fluid.beta1;
@@ -262,26 +261,31 @@ void FluidCore::predict(const Real dt) {
   }
 }
 
-void FluidCore::build_near_list(const Real radius, const std::size_t n) {
-  near.radius = radius;
-  near.support_only = true;
-  near.offset.resize(n + 1);
-  // An upper bound; not trimmed (n_pairs() = offset.back()), so that the next step need not zero-fill it.
-  if (near.index.size() < nl.n_pairs()) resize_with_headroom(near.index, nl.n_pairs());
-  near.offset[0] = 0;
-  std::size_t m = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec xi = p.position[i];
-    if (roles[i] != Role::none)
-      for (std::size_t k = nl.begin(i); k < nl.end(i); ++k) {
-        const LocalIndex j = nl.index[k];
-        const bool keep = roles[static_cast<std::size_t>(j)] != Role::none &&
-                          in_support((p.position[static_cast<std::size_t>(j)] - xi).squaredNorm(), near.radius);
-        near.index[m] = j;  // branch-free append
-        m += keep;
-      }
-    near.offset[i + 1] = m;
+void FluidCore::build_wide_list(const bool row_particles) {
+  const std::size_t n = p.n_owned();
+  wide_row.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    wide_row[i] = (roles[i] == Role::fluid && nu > 0) || (row_particles && has_row(roles[i]));
+  takes_part.resize(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) takes_part[i] = roles[i] != Role::none;
+  build_neighbour_list_masked(p.position, re_l, nl, grid, n, wide_row, takes_part, std::min(cell_size, re_l));
+}
+
+void FluidCore::build_near_list(const Real radius, const std::size_t n, const std::optional<Real> predicted_dt) {
+  takes_part.resize(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) takes_part[i] = roles[i] != Role::none;
+  // The wide list's rows (fluid particles) hold their near rows when the wide radius covers the near one plus
+  // both particles' moves since it was built: predict moved the fluid particles (owned and ghosts) by dt v.
+  bool reuse = false;
+  if (predicted_dt) {
+    Real v2_max = 0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (roles[i] == Role::fluid) v2_max = std::max(v2_max, p.velocity[i].squaredNorm());
+    reuse = re_l > radius + 2.0 * 1.01 * *predicted_dt * std::sqrt(v2_max);
   }
+  const WiderRows wider{nl, wide_row};
+  build_neighbour_list_masked(p.position, radius, near, near_grid, n, takes_part, takes_part, std::min(cell_size, radius),
+                              true, reuse ? &wider : nullptr);
 }
 
 /// Collision model (MPS-Basic collision()): approaching pairs closer than the collision distance

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,8 +80,15 @@ struct FluidCore {
   const Mat& wall_rotation(std::size_t j) const;
   /// Eq. 12, 16, 17: v* = v + dt (nu lap v + g), r* = r + dt v* for fluid particles (fluid/fluid_core.cpp).
   void predict(Real dt);
-  /// Pairs within `radius` at the predicted positions, rows of the first n particles (a filtered copy of nl).
-  void build_near_list(Real radius, std::size_t n);
+  /// The wide list nl (pairs within re_laplacian) at the current positions, rows of the owned particles that
+  /// need it only: the fluid particles for the viscous term (nu > 0), and with `row_particles` every particle
+  /// with a pressure row (a Laplacian of re_laplacian in the rows); the other rows are empty.
+  void build_wide_list(bool row_particles);
+  /// The near list: the pairs within `radius` (in_support) at the current positions of the particles that take
+  /// part, rows of the first n particles (the others' rows empty), each row in increasing index order. With
+  /// predicted_dt (the step's predict moved the fluid since build_wide_list), the wide list's rows are filtered
+  /// where they cover the near ones.
+  void build_near_list(Real radius, std::size_t n, std::optional<Real> predicted_dt);
   /// Collision model (MPS-Basic collision()).
   void collide(Real dt);
   /// Eq. 8 at the predicted positions: n*, and the free-surface double check; `keep_surface`: a particle
@@ -113,7 +121,10 @@ struct FluidCore {
   std::vector<WallMotion> body_motion;
   std::vector<WallMotionState> body_state;  ///< each body's motion at the last move_walls (at rest: the identity)
   int rank = 0;
-  Real dp = 0, re_g = 0, re_l = 0, r_max = 0;
+  Real dp = 0, re_g = 0, re_l = 0;
+  /// The side of the neighbour searches' cells, and of the cell order the particles are kept in, so that the
+  /// lists' rows come out nearly sorted.
+  Real cell_size = 0;
   LatticeConstants lat_g, lat_l;
   Real beta1 = 0, beta2 = 0;
   Vec gravity = Vec::Zero();       ///< of the current step: gravity_full times the ramp at its middle
@@ -146,7 +157,8 @@ struct FluidCore {
   // Work arrays, reused between steps.
   std::vector<Role> roles;
   NeighbourList nl, near;
-  CellGrid grid;
+  CellGrid grid, near_grid;
+  std::vector<std::uint8_t> wide_row, takes_part;  ///< the masks of the lists' rows and candidates
   std::vector<Real> n_star;
   std::vector<Vec> v_new, dv;
   std::vector<LocalIndex> row_of;  ///< local column id of each particle's pressure unknown, -1 if none

@@ -36,7 +36,11 @@ struct FluidSolver::Impl : fluid_detail::FluidCore {
       : FluidCore(setup, particles, distribution, options),
         scheme(setup.parameters.scheme == FluidScheme::projection
                    ? fluid_detail::make_projection_scheme(*this, setup.parameters)
-                   : fluid_detail::make_standard_scheme(*this, setup.parameters)) {}
+                   : fluid_detail::make_standard_scheme(*this, setup.parameters)) {
+    // Half the near radius: every particle has a near row, and the wide rows (fluid only) scan little more with
+    // these cells than with cells of half their own radius (docs/performance.md, "Neighbour search").
+    cell_size = 0.5 * scheme->near_radius();
+  }
 
   std::unique_ptr<fluid_detail::PressureScheme> scheme;
 };
@@ -127,7 +131,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   const bool has_solid = m.p.n_of_kind(ParticleKind::solid) > 0;
   const bool reorder = m.opt.reorder_every > 0 && !has_solid && m.n_steps % static_cast<std::size_t>(m.opt.reorder_every) == 0;
   const bool rebuilt = m.dist.renew(m.p, {"position", "velocity"}, std::nullopt, reorder, [&] {
-    if (reorder) m.p.reorder(cell_order(m.p.position, 0.5 * m.r_max));
+    if (reorder) m.p.reorder(cell_order(m.p.position, m.cell_size));
   });
   // A coupled solid's view was set on the owners: their ghosts get it here (a rebuild copied it already).
   if (!rebuilt && m.solid_boundary) m.dist.exchange_ghosts(m.p, {fluid_detail::FluidCore::solid_surface_field}, ParticleKind::solid);
@@ -135,32 +139,31 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   t0 = Clock::now();
   m.classify();
   m.gravity = m.gravity_full * ramp_factor(t + 0.5 * dt, m.gravity_ramp);
-  const bool ghost_rows = m.scheme->ghosts_need_neighbours();
-  const auto search = [&] {
-    t0 = Clock::now();
-    build_neighbour_list(m.p.position, m.r_max, m.nl, m.grid, true, ghost_rows ? m.p.size() : m.p.n_owned());
-    report.t_neighbours += seconds_since(t0);
-  };
+  const std::size_t n_near_rows = m.scheme->ghosts_need_neighbours() ? m.p.size() : m.p.n_owned();
   const bool initial = m.n_steps == 0;
   if (initial) {
     // The initial state with the walls where the run starts them (where the case placed them, around the water
     // it filled): a wall that moves in the first step (a tank that starts rolling, a motion table whose first
     // angle is not 0) is that step's motion, not part of the state the fluid starts at rest in.
     report.t_rest += seconds_since(t0);
-    search();
+    t0 = Clock::now();
+    m.build_near_list(m.scheme->near_radius(), n_near_rows, std::nullopt);
+    report.t_neighbours += seconds_since(t0);
     t0 = Clock::now();
     m.scheme->initial_state(report);
   }
   m.move_walls(t + dt);
   report.t_rest += seconds_since(t0);
-  if (!initial || m.walls_move()) search();
+  t0 = Clock::now();
+  m.build_wide_list(m.scheme->rows_need_wide_list());
+  report.t_neighbours += seconds_since(t0);
 
   t0 = Clock::now();
   m.predict(dt);
   report.t_rest += seconds_since(t0);
   m.refresh_ghosts({"position", "velocity"}, report);
   t0 = Clock::now();
-  m.build_near_list(m.scheme->near_radius(), ghost_rows ? m.p.size() : m.p.n_owned());
+  m.build_near_list(m.scheme->near_radius(), n_near_rows, dt);
   report.t_neighbours += seconds_since(t0);
   t0 = Clock::now();
   m.collide(dt);

@@ -20,8 +20,10 @@ class PressureScheme {
   virtual Real near_radius() const = 0;
   /// Whether the ghosts need their neighbours too (the projection's rows reach two kernel radii).
   virtual bool ghosts_need_neighbours() const = 0;
+  /// Whether every particle with a pressure row needs its pairs within re_laplacian (FluidCore::build_wide_list).
+  virtual bool rows_need_wide_list() const = 0;
   /// The first step only, before the walls move in it: the initial state (the projection's references and
-  /// start positions), with the neighbour list of that state.
+  /// start positions), with the near list of that state.
   virtual void initial_state(FluidStepReport&) {}
   /// Whether a particle flagged free-surface in the last step stays flagged (the active set's warm start).
   virtual bool keeps_surface() const { return false; }

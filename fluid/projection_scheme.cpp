@@ -40,13 +40,12 @@ class ProjectionScheme final : public PressureScheme {
   ProjectionScheme(FluidCore& fluid_core, const FluidParameters& fluid)
       : core(fluid_core), p(core.p), dp(core.dp), re_g(core.re_g), lat_g(core.lat_g), lat_l(core.lat_l),
         gravity(core.gravity), rho(core.rho), c(core.c), kappa(core.kappa), n_steps(core.n_steps), comm(core.comm),
-        roles(core.roles), nl(core.nl), near(core.near), dv(core.dv), row_of(core.row_of),
+        roles(core.roles), near(core.near), dv(core.dv), row_of(core.row_of),
         particle_of_row(core.particle_of_row), sys(core.sys), x_own(core.x_own) {
     max_active_set_solves = fluid.max_active_set_solves;
     stabilisation = fluid.projection_stabilisation;
     kernel = fluid.projection_kernel;
     re_p = fluid.projection_radius * dp;
-    core.r_max = std::max(core.r_max, re_p);
     const KernelSums sums = lattice_sums(kernel, dp, re_p);
     n0_kernel = sums.n0;
     c_lattice = sums.c;
@@ -58,6 +57,7 @@ class ProjectionScheme final : public PressureScheme {
   Real near_radius() const override { return std::max(re_g, re_p); }  // the kernel may reach further than re_g
   // The ghosts' rows too: their dn/dx enter the pressure rows of their neighbours.
   bool ghosts_need_neighbours() const override { return true; }
+  bool rows_need_wide_list() const override { return false; }
 
   void initial_state(FluidStepReport& report) override {
     reference_densities();
@@ -129,7 +129,7 @@ class ProjectionScheme final : public PressureScheme {
     for (std::size_t i = 0; i < p.n_owned(); ++i) {
       if (roles[i] == Role::none) continue;
       Real n_fluid_i = 0, n_other = 0;  // the kernel density from the fluid neighbours, from the others
-      for_each_pair(p.position, nl, re_p, i, [&](const std::size_t j) { return roles[j] != Role::none; },
+      for_each_pair(p.position, near, re_p, i, [&](const std::size_t j) { return roles[j] != Role::none; },
                     [&](const std::size_t j, const Vec&, const Real r2, Real) {
                       (roles[j] == Role::fluid ? n_fluid_i : n_other) += kernel_at(kernel, std::sqrt(r2), re_p).w;
                     });
@@ -671,7 +671,6 @@ class ProjectionScheme final : public PressureScheme {
   const std::size_t& n_steps;
   const MPI_Comm& comm;
   const std::vector<Role>& roles;
-  NeighbourList& nl;
   NeighbourList& near;
   std::vector<Vec>& dv;
   std::vector<LocalIndex>& row_of;

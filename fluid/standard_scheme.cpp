@@ -23,6 +23,7 @@ class StandardScheme final : public PressureScheme {
 
   Real near_radius() const override { return re_g; }
   bool ghosts_need_neighbours() const override { return false; }
+  bool rows_need_wide_list() const override { return true; }  // eq. 23's Laplacian at re_laplacian
 
   /// Eq. 23 assembled for this rank's rows (its owned particles with a pressure unknown): -lap P + P / (c^2
   /// dt^2) = kappa rho / dt^2 (n* - n0) / n0, with p = 0 rows (free surface) as identity rows dropped from

@@ -1,6 +1,8 @@
 // Unit tests of the cell-linked neighbour search: identical neighbour sets to brute force, in the 2D
-// and the 3D build (random points, lattices, clusters, points on a line), and the cell numbering.
+// and the 3D build (random points, lattices, clusters, points on a line, rows and candidates masked), and the
+// cell numbering.
 #include "core/geometry.hpp"
+#include "core/kernel.hpp"
 #include "core/neighbours.hpp"
 
 #include <gtest/gtest.h>
@@ -70,6 +72,54 @@ TEST(Neighbours, ListOfSelectedPointsMatchesBruteForce) {
       EXPECT_EQ(got, ref[static_cast<std::size_t>(rows[q])]) << "row " << q << ", radius " << radius;
     }
   }
+}
+
+// Rows of some points only, neighbours among some points only, cells of another side than the radius, and the
+// pairs of the operators' support (build_neighbour_list_masked): as brute force, each row in increasing order.
+TEST(Neighbours, MaskedListMatchesBruteForce) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<Real> u(0, 1);
+  std::vector<Vec> x(1500);
+  for (auto& p : x)
+    for (int a = 0; a < dim; ++a) p[a] = u(rng);
+  x[6] = x[3];  // coincident: neighbours by distance, outside the support
+  std::vector<std::uint8_t> rows(x.size()), candidates(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    rows[i] = i % 3 != 1;
+    candidates[i] = i % 7 != 2;
+  }
+  const std::size_t n_rows = 1200;  // the last points are candidates without rows (ghosts)
+  std::size_t n_checked = 0;
+  for (const Real radius : {0.03, 0.1})
+    for (const Real cell : {radius, radius / 2, radius / 2.7})
+      for (const bool support : {false, true}) {
+        NeighbourList nl;
+        CellGrid grid;
+        build_neighbour_list_masked(x, radius, nl, grid, n_rows, rows, candidates, cell, support);
+        ASSERT_EQ(nl.n_particles(), n_rows);
+        EXPECT_EQ(nl.support_only, support);
+        for (std::size_t i = 0; i < n_rows; ++i) {
+          std::vector<LocalIndex> ref;
+          for (std::size_t j = 0; rows[i] && j < x.size(); ++j) {
+            const Real r2 = (x[j] - x[i]).squaredNorm();
+            if (i != j && candidates[j] && (support ? in_support(r2, radius) : r2 < radius * radius))
+              ref.push_back(static_cast<LocalIndex>(j));
+          }
+          const std::vector<LocalIndex> got(nl.index.begin() + static_cast<long>(nl.begin(i)),
+                                            nl.index.begin() + static_cast<long>(nl.end(i)));
+          ASSERT_EQ(got, ref) << "row " << i << ", radius " << radius << ", cell " << cell << ", support " << support;
+          n_checked += ref.size();
+        }
+        const auto row_3 = nl.index.begin() + static_cast<long>(nl.begin(3));
+        const auto row_3_end = nl.index.begin() + static_cast<long>(nl.end(3));
+        const bool coincident = std::find(row_3, row_3_end, 6) != row_3_end;
+        EXPECT_EQ(coincident, !support);
+      }
+  EXPECT_GT(n_checked, 1000u);
+  NeighbourList nl;
+  CellGrid grid;
+  EXPECT_THROW(build_neighbour_list_masked(x, 0.1, nl, grid, n_rows, rows, candidates, 0.2), std::logic_error);
+  EXPECT_THROW(build_neighbour_list_masked(x, 0.1, nl, grid, x.size() + 1, rows, candidates, 0.05), std::logic_error);
 }
 
 TEST(Neighbours, LatticeMatchesBruteForce) {
