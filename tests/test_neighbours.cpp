@@ -122,6 +122,45 @@ TEST(Neighbours, MaskedListMatchesBruteForce) {
   EXPECT_THROW(build_neighbour_list_masked(x, 0.1, nl, grid, x.size() + 1, rows, candidates, 0.05), std::logic_error);
 }
 
+// Rows taken from a wider list (the fluid's near rows from its wide rows) are the rows a search gives, when the
+// wider radius covers the narrower one plus the points' moves since the wider list was built.
+TEST(Neighbours, RowsFromAWiderListMatchTheSearch) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Real> u(0, 1), move(-0.004, 0.004);
+  std::vector<Vec> x(1500);
+  for (auto& p : x)
+    for (int a = 0; a < dim; ++a) p[a] = u(rng);
+  std::vector<std::uint8_t> all(x.size(), 1), wide_rows(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) wide_rows[i] = i % 4 != 0;
+  const Real radius = 0.05;
+  NeighbourList wide, from_wide, searched;
+  CellGrid grid;
+  build_neighbour_list_masked(x, 2 * radius, wide, grid, x.size(), wide_rows, all, radius / 2);
+  for (auto& p : x)
+    for (int a = 0; a < dim; ++a) p[a] += move(rng);  // |move| < 0.004 sqrt(dim) < radius / 2 per point
+  const WiderRows wider{wide, wide_rows};
+  build_neighbour_list_masked(x, radius, from_wide, grid, x.size(), all, all, radius / 2, true, &wider);
+  build_neighbour_list_masked(x, radius, searched, grid, x.size(), all, all, radius / 2, true);
+  EXPECT_EQ(from_wide.offset, searched.offset);
+  EXPECT_TRUE(std::equal(searched.index.begin(), searched.index.begin() + static_cast<long>(searched.n_pairs()),
+                         from_wide.index.begin()));
+  EXPECT_GT(searched.n_pairs(), 1000u);
+  // The rows are the wider list's: one emptied there (its entries pointing at itself) comes out empty.
+  NeighbourList poisoned = wide;
+  const std::size_t r = 1;
+  ASSERT_TRUE(wide_rows[r] && searched.count(r) > 0);
+  for (std::size_t k = poisoned.begin(r); k < poisoned.end(r); ++k) poisoned.index[k] = static_cast<LocalIndex>(r);
+  const WiderRows poisoned_rows{poisoned, wide_rows};
+  build_neighbour_list_masked(x, radius, from_wide, grid, x.size(), all, all, radius / 2, true, &poisoned_rows);
+  EXPECT_EQ(from_wide.count(r), 0u);
+  EXPECT_EQ(from_wide.count(r + 1), searched.count(r + 1));
+  // A wider list must be another list, of a radius at least this one, and only for the support's pairs.
+  EXPECT_THROW(build_neighbour_list_masked(x, 3 * radius, from_wide, grid, x.size(), all, all, radius, true, &wider),
+               std::logic_error);
+  EXPECT_THROW(build_neighbour_list_masked(x, radius, from_wide, grid, x.size(), all, all, radius / 2, false, &wider),
+               std::logic_error);
+}
+
 TEST(Neighbours, LatticeMatchesBruteForce) {
   const Real dp = 0.01;
 #if MPSFSI_DIM == 2
