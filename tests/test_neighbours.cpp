@@ -21,6 +21,16 @@ std::vector<std::vector<LocalIndex>> brute_force(const std::vector<Vec>& x, cons
   return nb;
 }
 
+/// n points uniform in the unit square or cube.
+std::vector<Vec> random_points(const std::size_t n, const unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<Real> u(0, 1);
+  std::vector<Vec> x(n);
+  for (auto& p : x)
+    for (int a = 0; a < dim; ++a) p[a] = u(rng);
+  return x;
+}
+
 void expect_same_as_brute_force(const std::vector<Vec>& x, const Real radius) {
   NeighbourList nl;
   build_neighbour_list(x, radius, nl);
@@ -53,11 +63,7 @@ TEST(Neighbours, RandomPointsMatchBruteForce) {
 
 // The neighbours of a few points (build_neighbour_list_of): row q holds those of point rows[q], as brute force.
 TEST(Neighbours, ListOfSelectedPointsMatchesBruteForce) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<Real> u(0, 1);
-  std::vector<Vec> x(1500);
-  for (auto& p : x)
-    for (int a = 0; a < dim; ++a) p[a] = u(rng);
+  std::vector<Vec> x = random_points(1500, 7);
   const std::vector<LocalIndex> rows = {0, 17, 17, 400, 1499, 3};
   for (const Real radius : {0.02, 0.1, 0.3}) {
     NeighbourList nl;
@@ -77,11 +83,7 @@ TEST(Neighbours, ListOfSelectedPointsMatchesBruteForce) {
 // Rows of some points only, neighbours among some points only, cells of another side than the radius, and the
 // pairs of the operators' support (build_neighbour_list_masked): as brute force, each row in increasing order.
 TEST(Neighbours, MaskedListMatchesBruteForce) {
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<Real> u(0, 1);
-  std::vector<Vec> x(1500);
-  for (auto& p : x)
-    for (int a = 0; a < dim; ++a) p[a] = u(rng);
+  std::vector<Vec> x = random_points(1500, 11);
   x[6] = x[3];  // coincident: neighbours by distance, outside the support
   std::vector<std::uint8_t> rows(x.size()), candidates(x.size());
   for (std::size_t i = 0; i < x.size(); ++i) {
@@ -125,11 +127,9 @@ TEST(Neighbours, MaskedListMatchesBruteForce) {
 // Rows taken from a wider list (the fluid's near rows from its wide rows) are the rows a search gives, when the
 // wider radius covers the narrower one plus the points' moves since the wider list was built.
 TEST(Neighbours, RowsFromAWiderListMatchTheSearch) {
+  std::vector<Vec> x = random_points(1500, 5);
   std::mt19937 rng(5);
-  std::uniform_real_distribution<Real> u(0, 1), move(-0.004, 0.004);
-  std::vector<Vec> x(1500);
-  for (auto& p : x)
-    for (int a = 0; a < dim; ++a) p[a] = u(rng);
+  std::uniform_real_distribution<Real> move(-0.004, 0.004);
   std::vector<std::uint8_t> all(x.size(), 1), wide_rows(x.size());
   for (std::size_t i = 0; i < x.size(); ++i) wide_rows[i] = i % 4 != 0;
   const Real radius = 0.05;
