@@ -39,6 +39,8 @@ void RunOutput::select_fields(const ParticleSet& particles) {
   std::vector<std::string> known;
   for (const auto& kv : particles.scalar_fields()) known.push_back(kv.first);
   for (const auto& kv : particles.vector_fields()) known.push_back(kv.first);
+  // The internal fields (names starting with '_') last.
+  std::stable_partition(known.begin(), known.end(), [](const std::string& name) { return name[0] != '_'; });
   for (const auto& name : spec_.output.fields)
     if (!particles.has_scalar_field(name) && !particles.has_vector_field(name))
       throw CaseError(fmt::format("{}: output.fields: '{}' is not a field of this case; expected some of: {} (the "

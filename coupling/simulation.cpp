@@ -444,8 +444,6 @@ class RunLoop {
                            RunLog::json_escape(c.path)));
   }
 
-  /// The partition weights of the first n particles: their work in a fluid step (fluid_work_weight; solid
-  /// particles 1).
   /// The run's participants (the fluid, the solid, or both in that order), as the checkpoint holds them.
   std::vector<Participant*> participants() const {
     std::vector<Participant*> all;
@@ -454,11 +452,9 @@ class RunLoop {
     return all;
   }
 
-  std::vector<Real> work_weights(const std::size_t n) const {
-    std::vector<Real> w(n);
-    for (std::size_t i = 0; i < n; ++i) w[i] = fluid_work_weight(p_.kind[i]);
-    return w;
-  }
+  /// The partition weights of the first n particles: their work in a fluid step (fluid_work_weights; solid
+  /// particles 1).
+  std::vector<Real> work_weights(const std::size_t n) const { return fluid_work_weights(p_, n); }
 
   /// Steps between checks of the owned work's balance (re-partition above the threshold).
   static constexpr std::size_t repartition_every = 20;

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace mpsfsi::fluid_detail {
@@ -90,6 +91,7 @@ FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distributi
 
   p.add_scalar_field(fluid_fields::pressure, 0.0);
   p.add_scalar_field(fluid_fields::free_surface, 0.0);
+  p.add_scalar_field(near_fluid_field, 1.0);
   if (opt.coupled_solid) {
     for (const char* name : {solid_surface_field, solid_reference_field, solid_offset_field}) p.add_scalar_field(name, 0.0);
     for (const char* name : {solid_x_field, solid_v_field}) p.add_vector_field(name);
@@ -203,6 +205,82 @@ void FluidCore::classify() {
   const auto& surface = p.scalar_field(solid_surface_field);
   for (std::size_t i = 0; i < n; ++i)
     if (p.kind[i] == ParticleKind::solid) roles[i] = surface[i] != 0 ? Role::boundary : Role::dummy;
+}
+
+double FluidCore::leave_out_far_walls(const Real reach, const Real dt) {
+  const std::size_t n = p.size();
+  const auto is_wall = [&](const std::size_t i) {
+    return (p.kind[i] == ParticleKind::wall || p.kind[i] == ParticleKind::dummy) && roles[i] != Role::none;
+  };
+  // The reach grows by the step's moves: the fluid's (prediction and correction) and the walls'.
+  Real v2_max = 0;
+  bool any_fluid = false;
+  Vec lo = Vec::Constant(std::numeric_limits<Real>::max()), hi = -lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (roles[i] == Role::fluid) any_fluid = true;
+    if (roles[i] == Role::fluid || is_wall(i)) {
+      v2_max = std::max(v2_max, p.velocity[i].squaredNorm());
+      lo = lo.cwiseMin(p.position[i]);
+      hi = hi.cwiseMax(p.position[i]);
+    }
+  }
+  const Real r = reach + dp + 4.0 * dt * std::sqrt(v2_max);
+  // Cells of side r / 2 that hold a fluid particle, grown by two cells along every axis: a point closer than r
+  // to a fluid particle lies in a grown cell (its cell differs by at most two along each axis).
+  const Real h = 0.5 * r;
+  IVec n_cells = IVec::Ones();
+  double n_total = 1;
+  if (any_fluid)
+    for (int a = 0; a < dim; ++a) {
+      n_cells[a] = static_cast<int>(std::min(1e9, std::floor((hi[a] - lo[a]) / h))) + 1;
+      n_total *= n_cells[a];
+    }
+  auto& near_fluid = p.scalar_field(near_fluid_field);
+  // Without fluid every wall is far; a grid larger than the particles (spread out, or a reach of a few
+  // spacings in a huge domain) is not built: every wall takes part.
+  const bool keep_all = any_fluid && !(n_total <= 4.0 * static_cast<double>(n) + 1024);
+  if (!keep_all) {
+    const auto cell_of = [&](const Vec& x) {
+      std::size_t k = 0;
+      for (int a = dim - 1; a >= 0; --a)
+        k = k * static_cast<std::size_t>(n_cells[a]) +
+            static_cast<std::size_t>(std::clamp(static_cast<int>((x[a] - lo[a]) / h), 0, n_cells[a] - 1));
+      return k;
+    };
+    std::vector<std::uint8_t> cells(any_fluid ? static_cast<std::size_t>(n_total) : 0, 0), grown;
+    for (std::size_t i = 0; i < n; ++i)
+      if (roles[i] == Role::fluid) cells[cell_of(p.position[i])] = 1;
+    std::size_t stride = 1;
+    for (int a = 0; a < dim; ++a) {  // grown along axis a by two cells
+      grown = cells;
+      const auto m = static_cast<std::size_t>(n_cells[a]);
+      for (std::size_t k = 0; k < cells.size(); ++k) {
+        if (!cells[k]) continue;
+        const std::size_t c = (k / stride) % m;
+        for (std::size_t d = 1; d <= 2; ++d) {
+          if (c >= d) grown[k - d * stride] = 1;
+          if (c + d < m) grown[k + d * stride] = 1;
+        }
+      }
+      cells.swap(grown);
+      stride *= m;
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      near_fluid[i] = is_wall(i) && !cells.empty() && cells[cell_of(p.position[i])] ? 1.0 : 0.0;
+  } else {
+    for (std::size_t i = 0; i < n; ++i) near_fluid[i] = 1.0;
+  }
+  // A particle that some rank needs takes part on every rank that holds it.
+  double t_halo = 0;
+  if (dist.n_ranks() > 1) {
+    const auto t0 = Clock::now();
+    dist.reverse_sum(p, {near_fluid_field});
+    dist.exchange_ghosts(p, {near_fluid_field});
+    t_halo = seconds_since(t0);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (is_wall(i) && near_fluid[i] == 0) roles[i] = Role::none;
+  return t_halo;
 }
 
 /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own.

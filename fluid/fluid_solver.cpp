@@ -45,10 +45,18 @@ struct FluidSolver::Impl : fluid_detail::FluidCore {
   std::unique_ptr<fluid_detail::PressureScheme> scheme;
 };
 
-Real fluid_work_weight(const ParticleKind kind) {
-  if (kind == ParticleKind::wall) return 0.8;
-  if (kind == ParticleKind::dummy) return 0.2;
+Real fluid_work_weight(const ParticleKind kind, const bool takes_part) {
+  if (kind == ParticleKind::wall) return takes_part ? 0.8 : 0.05;
+  if (kind == ParticleKind::dummy) return takes_part ? 0.2 : 0.05;
   return 1.0;
+}
+
+std::vector<Real> fluid_work_weights(const ParticleSet& p, const std::size_t n) {
+  const std::vector<Real>* marks =
+      p.has_scalar_field(fluid_detail::FluidCore::near_fluid_field) ? &p.scalar_field(fluid_detail::FluidCore::near_fluid_field) : nullptr;
+  std::vector<Real> w(n);
+  for (std::size_t i = 0; i < n; ++i) w[i] = fluid_work_weight(p.kind[i], !marks || (*marks)[i] != 0);
+  return w;
 }
 
 Real fluid_interaction_radius(const FluidSetup& setup) {
@@ -138,6 +146,8 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_halo += seconds_since(t0);
   t0 = Clock::now();
   m.classify();
+  // The first step takes every particle: the initial state (the projection's references) is every wall's.
+  if (m.n_steps > 0 && m.scheme->wall_reach() > 0) report.t_halo += m.leave_out_far_walls(m.scheme->wall_reach(), dt);
   m.gravity = m.gravity_full * ramp_factor(t + 0.5 * dt, m.gravity_ramp);
   const std::size_t n_near_rows = m.scheme->ghosts_need_neighbours() ? m.p.size() : m.p.n_owned();
   const bool initial = m.n_steps == 0;

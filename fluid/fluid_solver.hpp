@@ -80,8 +80,12 @@ Real fluid_interaction_radius(const FluidSetup& setup);
 
 /// Work of one particle of `kind` in a fluid step relative to a fluid particle, for the partition of the
 /// particles over the ranks: every particle is in the neighbour search, walls also have pressure rows, fluid
-/// particles also the explicit phases (docs/performance.md, ## Parallel runs). Other kinds: 1.
-Real fluid_work_weight(ParticleKind kind);
+/// particles also the explicit phases (docs/performance.md, ## Parallel runs). Other kinds: 1. A wall or dummy
+/// particle that took no part in the last fluid step (far from the fluid, `takes_part` false) costs little.
+Real fluid_work_weight(ParticleKind kind, bool takes_part = true);
+/// fluid_work_weight of the first n particles of p, with the marks of the last fluid step where p has them (a
+/// set the fluid has not stepped yet: every particle takes part).
+std::vector<Real> fluid_work_weights(const ParticleSet& p, std::size_t n);
 
 /// The projection's force on fluid particle k, -(1/rho)(d/C) sum_i p_i dn_i/dx_k = -(1/rho)(d/C) sum_j (p_k + p_j)
 /// dn_j/dx_k, holds the whole pressure, not a difference of pressures: a particle displaced by xi from its

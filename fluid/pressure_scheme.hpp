@@ -22,6 +22,9 @@ class PressureScheme {
   virtual bool ghosts_need_neighbours() const = 0;
   /// Whether every particle with a pressure row needs its pairs within re_laplacian (FluidCore::build_wide_list).
   virtual bool rows_need_wide_list() const = 0;
+  /// How far from the fluid a wall or dummy particle can be and still change a row that is read, its own or
+  /// another's (FluidCore::leave_out_far_walls) [m]; 0: every one takes part.
+  virtual Real wall_reach() const { return 0; }
   /// The first step only, before the walls move in it: the initial state (the projection's references and
   /// start positions), with the near list of that state.
   virtual void initial_state(FluidStepReport&) {}

@@ -58,6 +58,10 @@ class ProjectionScheme final : public PressureScheme {
   // The ghosts' rows too: their dn/dx enter the pressure rows of their neighbours.
   bool ghosts_need_neighbours() const override { return true; }
   bool rows_need_wide_list() const override { return false; }
+  /// The longest chain of pairs from a fluid particle to a particle whose row is read: a wet wall (near
+  /// radius), its group's dummies (re_g), their neighbours (near radius: their densities, and the columns of the
+  /// stabilisation's pairs), whose own group parents (re_g) name those columns.
+  Real wall_reach() const override { return 2 * near_radius() + 2 * re_g; }
 
   void initial_state(FluidStepReport& report) override {
     reference_densities();

@@ -228,3 +228,74 @@ TEST(Walls, WaterThrownAtASlopeOnTheFloorStaysOutOfIt) {
   EXPECT_EQ(t.n_inside, 0u) << "deepest " << t.deepest << " m";
   EXPECT_GT(t.n_put_back, 0u);
 }
+
+namespace {
+
+/// The hydrostatic case (dp 1 cm) with its box `height` tall, `n_steps` steps: the rows of the last step's
+/// pressure system and the fluid particles' pressures and positions by global id (the water's ids come first and
+/// do not depend on the box).
+struct AtRest {
+  std::size_t n_rows = 0, n_walls = 0, n_fluid = 0;
+  std::vector<Real> pressure;
+  std::vector<Vec> position;
+};
+AtRest water_at_rest(const Real height, const int n_steps) {
+  const std::string file = dim == 2 ? "/cases/hydrostatic.yaml" : "/cases/3d/hydrostatic.yaml";
+  const std::string top = fmt::format("{}", height);
+  const CaseSpec spec = load_case(
+      std::string(MPSFSI_SOURCE_DIR) + file,
+      {"dp=0.01", "fluid.tolerance=1e-14", "fluid.density_tolerance=1e-16", "fluid.max_iterations=5000",
+       dim == 2 ? "walls.box.rectangle.max=[0.2," + top + "]" : "walls.box.rectangle.max=[0.2,0.1," + top + "]",
+       dim == 2 ? "domain.max=[0.25," + fmt::format("{}", height + 0.1) + "]"
+                : "domain.max=[0.25,0.15," + fmt::format("{}", height + 0.1) + "]"});
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), p, dist};
+  AtRest out;
+  Real t = 0;
+  for (int step = 0; step < n_steps; ++step) {
+    const Real dt = fluid.stable_dt();
+    out.n_rows = fluid.advance(t, dt).n_rows;
+    t += dt;
+  }
+  out.n_fluid = p.n_of_kind(ParticleKind::fluid);
+  out.n_walls = p.n_of_kind(ParticleKind::wall);
+  out.pressure.assign(out.n_fluid, 0.0);
+  out.position.assign(out.n_fluid, Vec::Zero());
+  const auto& pressure = p.scalar_field("pressure");
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.kind[i] != ParticleKind::fluid) continue;
+    const auto id = static_cast<std::size_t>(p.global_id[i]);
+    EXPECT_LT(id, out.n_fluid);
+    if (id >= out.n_fluid) continue;
+    out.pressure[id] = pressure[i];
+    out.position[id] = p.position[i];
+  }
+  return out;
+}
+
+}  // namespace
+
+// The default scheme leaves the walls far from the water out of the step (FluidCore::leave_out_far_walls): water
+// at rest in its box, whose walls all lie within the reach of the water and take part, and the same water in the
+// box made 1 m tall. The tall box's step has exactly the short box's rows (its walls beyond the reach have none),
+// and the water's pressures and positions are the short box's to the solver's round-off: walls left out that a
+// row needed would change them.
+TEST(Walls, WallsFarFromTheWaterTakeNoPartAndChangeNothing) {
+  const AtRest near = water_at_rest(0.3, 4);
+  const AtRest far = water_at_rest(1.0, 4);
+  ASSERT_GT(far.n_walls, near.n_walls + 50);
+  EXPECT_EQ(near.n_rows, near.n_fluid + near.n_walls);  // the short box: every wall has its row
+  EXPECT_EQ(far.n_rows, near.n_rows);
+  ASSERT_EQ(far.n_fluid, near.n_fluid);
+  Real dp_max = 0, dx_max = 0, p_max = 0;
+  for (std::size_t k = 0; k < near.n_fluid; ++k) {
+    dp_max = std::max(dp_max, std::abs(far.pressure[k] - near.pressure[k]));
+    dx_max = std::max(dx_max, (far.position[k] - near.position[k]).norm());
+    p_max = std::max(p_max, near.pressure[k]);
+  }
+  EXPECT_GT(p_max, 1500.0);  // the hydrostatic pressure at the floor, 1.96 kPa
+  EXPECT_LT(dp_max, 1e-8 * p_max);
+  EXPECT_LT(dx_max, 1e-12);
+}
