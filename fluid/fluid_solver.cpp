@@ -146,8 +146,6 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_halo += seconds_since(t0);
   t0 = Clock::now();
   m.classify();
-  // The first step takes every particle: the initial state (the projection's references) is every wall's.
-  if (m.n_steps > 0 && m.scheme->wall_reach() > 0) report.t_halo += m.leave_out_far_walls(m.scheme->wall_reach(), dt);
   m.gravity = m.gravity_full * ramp_factor(t + 0.5 * dt, m.gravity_ramp);
   const std::size_t n_near_rows = m.scheme->ghosts_need_neighbours() ? m.p.size() : m.p.n_owned();
   const bool initial = m.n_steps == 0;
@@ -162,6 +160,8 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
     t0 = Clock::now();
     m.scheme->initial_state(report);
   }
+  // The initial state (the projection's references) is every particle's; the step leaves the far walls out.
+  if (m.scheme->wall_reach() > 0) report.t_halo += m.leave_out_far_walls(m.scheme->wall_reach(), dt);
   m.move_walls(t + dt);
   report.t_rest += seconds_since(t0);
   t0 = Clock::now();
