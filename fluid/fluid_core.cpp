@@ -230,15 +230,14 @@ double FluidCore::leave_out_far_walls(const Real reach, const Real dt) {
   const Real h = 0.5 * r;
   IVec n_cells = IVec::Ones();
   double n_total = 1;
-  if (any_fluid)
-    for (int a = 0; a < dim; ++a) {
-      n_cells[a] = static_cast<int>(std::min(1e9, std::floor((hi[a] - lo[a]) / h))) + 1;
-      n_total *= n_cells[a];
-    }
+  for (int a = 0; a < dim && any_fluid; ++a) {
+    n_cells[a] = static_cast<int>(std::min(1e9, std::floor((hi[a] - lo[a]) / h))) + 1;
+    n_total *= n_cells[a];
+  }
   auto& near_fluid = p.scalar_field(near_fluid_field);
-  // Without fluid every wall is far; a grid larger than the particles (spread out, or a reach of a few
-  // spacings in a huge domain) is not built: every wall takes part.
-  const bool keep_all = any_fluid && !(n_total <= 4.0 * static_cast<double>(n) + 1024);
+  // A rank without fluid, or a grid larger than the particles (spread out, or a reach of a few spacings in a
+  // huge domain), keeps every wall.
+  const bool keep_all = !any_fluid || !(n_total <= 4.0 * static_cast<double>(n) + 1024);
   if (!keep_all) {
     const auto cell_of = [&](const Vec& x) {
       std::size_t k = 0;
@@ -247,7 +246,7 @@ double FluidCore::leave_out_far_walls(const Real reach, const Real dt) {
             static_cast<std::size_t>(std::clamp(static_cast<int>((x[a] - lo[a]) / h), 0, n_cells[a] - 1));
       return k;
     };
-    std::vector<std::uint8_t> cells(any_fluid ? static_cast<std::size_t>(n_total) : 0, 0), grown;
+    std::vector<std::uint8_t> cells(static_cast<std::size_t>(n_total), 0), grown;
     for (std::size_t i = 0; i < n; ++i)
       if (roles[i] == Role::fluid) cells[cell_of(p.position[i])] = 1;
     std::size_t stride = 1;
@@ -266,7 +265,7 @@ double FluidCore::leave_out_far_walls(const Real reach, const Real dt) {
       stride *= m;
     }
     for (std::size_t i = 0; i < n; ++i)
-      near_fluid[i] = is_wall(i) && !cells.empty() && cells[cell_of(p.position[i])] ? 1.0 : 0.0;
+      near_fluid[i] = is_wall(i) && cells[cell_of(p.position[i])] ? 1.0 : 0.0;
   } else {
     for (std::size_t i = 0; i < n; ++i) near_fluid[i] = 1.0;
   }

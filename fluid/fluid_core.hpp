@@ -73,11 +73,12 @@ struct FluidCore {
   void classify();
   /// The particle field that marks, for leave_out_far_walls, the wall and dummy particles that take part.
   static constexpr const char* near_fluid_field = "_fluid_near_fluid";
-  /// After classify (and the first step's initial state): the wall and dummy particles farther than `reach`, plus the step's moves, from every
-  /// fluid particle that a rank holding them holds (owned or ghost) take no part in the step (role none): no
-  /// row of the step reads them when `reach` covers the scheme's chain of pairs from a fluid particle
-  /// (PressureScheme::wall_reach). A particle takes part on every rank that holds it as soon as one of them
-  /// needs it, so that the ranks' rows agree. Returns the halo time [s].
+  /// After classify (and the first step's initial state): the wall and dummy particles farther than `reach`,
+  /// plus the step's moves, from every fluid particle that a rank holding them holds (owned or ghost) take no
+  /// part in the step (role none): no row of the step reads them when `reach` covers the scheme's chain of pairs
+  /// from a fluid particle (PressureScheme::wall_reach). A particle takes part on every rank that holds it as
+  /// soon as one of them needs it, so that the ranks' rows agree; a rank without fluid keeps its walls. Returns
+  /// the halo time [s].
   double leave_out_far_walls(Real reach, Real dt);
   /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own
   /// (core/wall_motion.hpp), to their place and velocity at t.
