@@ -67,6 +67,7 @@ class ProjectionScheme final : public PressureScheme {
     reference_densities();
     core.refresh_ghosts({reference_density_field}, report);
     start_position = p.position;  // owned and ghosts: the first step's displacements (build_gram)
+    start_compressibility = 1e-4 / std::pow(std::max(water_extent(), dp), 2);
   }
 
   bool keeps_surface() const override { return true; }
@@ -141,6 +142,24 @@ class ProjectionScheme final : public PressureScheme {
       if (p.kind[i] == ParticleKind::dummy) reference[i] = n_fluid_i + n_other;
       else if (roles[i] != Role::fluid) reference[i] = n_other;
     }
+  }
+
+  /// The diagonal of the box that holds the fluid particles of every rank (0 without any).
+  Real water_extent() const {
+    Real box[2 * dim];  // -min and max per axis
+    std::fill(box, box + 2 * dim, -std::numeric_limits<Real>::infinity());
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (roles[i] != Role::fluid) continue;
+      for (int a = 0; a < dim; ++a) {
+        box[a] = std::max(box[a], -p.position[i][a]);
+        box[dim + a] = std::max(box[dim + a], p.position[i][a]);
+      }
+    }
+    MPI_Allreduce(MPI_IN_PLACE, box, 2 * dim, MPI_DOUBLE, MPI_MAX, comm);
+    Real d2 = 0;
+    for (int a = 0; a < dim; ++a)
+      if (box[dim + a] >= -box[a]) d2 += (box[dim + a] + box[a]) * (box[dim + a] + box[a]);
+    return std::sqrt(d2);
   }
 
   // ---- the exact projection (fluid.scheme = projection; fluid/fluid_parameters.hpp) ----
@@ -343,9 +362,12 @@ class ProjectionScheme final : public PressureScheme {
     for (std::size_t r = 0; r < n_rows; ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (linear_source) {
-        // The first solve: the error at the start plus the step's displacements' change to first order, the
-        // change that the correction's G undoes.
-        row_error[r] = initial_error[i] + linear_change(i, roles[i] != Role::fluid);
+        // The first solve: the step's displacements' change to first order, the change that the correction's G
+        // undoes. The arrangement at the start is the state of rest: its own density errors (the truncated
+        // supports below the free surface, the walls' lattice) are not removed in one step, which would weigh
+        // them by 1 / dt^2 against gravity's dt-independent part and make p0 depend on dt; the rest offsets
+        // take them in (start_from_rest).
+        row_error[r] = linear_change(i, roles[i] != Role::fluid);
         for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e)
           row_error[r] += linear_change(static_cast<std::size_t>(members[e]), false);
         continue;
@@ -416,8 +438,9 @@ class ProjectionScheme final : public PressureScheme {
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n_rows = particle_of_row.size();
     const std::size_t n_columns = column_particle.size();
-    // The first step solves for the incompressible pressure (kappa 1, start_compressibility of the case's).
-    row_compress = (initial_step() ? start_compressibility : 1.0) / (c * c * dt * dt);
+    // The first step solves for the incompressible pressure (kappa 1), with a compressibility that does not
+    // depend on dt (start_compressibility).
+    row_compress = initial_step() ? start_compressibility : 1.0 / (c * c * dt * dt);
     projection_source = (initial_step() ? 1.0 : kappa) * rho / (dt * dt) / n0_kernel;
     sys.values_only = !layout;
     sys.changed_rows.clear();
@@ -546,7 +569,11 @@ class ProjectionScheme final : public PressureScheme {
       }
       if (!additions || dry[i]) continue;
       if (roles[i] == Role::fluid) {
-        if (row_error[r] + dt * density_change(i, false, [&](const std::size_t j) { return trial_dv[j]; }) >
+        // The particle's own density: in the first step its error at the start too, which that step's rows
+        // leave out (build_gram), so that a free-surface particle of the start, short of neighbours, is not
+        // taken for a compressed one.
+        const Real start_error = linear_source ? initial_error[i] : 0.0;
+        if (start_error + row_error[r] + dt * density_change(i, false, [&](const std::size_t j) { return trial_dv[j]; }) >
             1e-9 * n0_kernel) {
           surface[i] = 0;
           changed = 1;
@@ -566,7 +593,7 @@ class ProjectionScheme final : public PressureScheme {
   }
 
   /// The projection's first step (the start from rest), whose system is the incompressible one: kappa 1, the
-  /// compressibility start_compressibility of the case's, stabilisation start_alpha.
+  /// compressibility start_compressibility, stabilisation start_alpha.
   bool initial_step() const { return n_steps == 0; }
 
   /// The start from rest, after the first step's solve: its pressure p0 holds the fluid. Each row then gets
@@ -687,8 +714,10 @@ class ProjectionScheme final : public PressureScheme {
   /// force's own terms, with enough of the Laplacian to keep G's near-null pressure modes out of p0 (at 0 they
   /// put errors of up to 90 % next to the walls at dp 1 cm; docs/validation.md, ## Fluid).
   static constexpr Real start_alpha = 0.1;
-  /// The first step's compressibility, as a share of the case's 1 / c^2: nearly incompressible.
-  static constexpr Real start_compressibility = 1e-4;
+  /// The first step's compressibility: a screening length of 100 times the water's extent D (initial_state),
+  /// 1e-4 / D^2, which keeps the rows regular without bounding p0's reach (the case's 1 / (c^2 dt^2) would
+  /// screen p0 over about 100 c dt, a length that shrinks with dt).
+  Real start_compressibility = 0;
   int max_active_set_solves = 6;  ///< fluid.max_active_set_solves
   Real stabilisation = 0;         ///< alpha of fluid.projection_stabilisation
   DensityKernel kernel = DensityKernel::wendland;  ///< fluid.projection_kernel

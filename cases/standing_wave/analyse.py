@@ -9,14 +9,15 @@ eta = a cos(k x) cos(omega t) with omega^2 = g k tanh(kh); an inviscid fluid kee
 Usage
   cases/standing_wave/analyse.py polygon cases/standing_wave/water.txt --length 0.6 --depth 0.2 --amplitude 0.01
   mpsfsi run cases/standing_wave.yaml --output out/standing_wave
-  cases/standing_wave/analyse.py analyse out/standing_wave [more runs] [--until 3] [--check 0.02]
+  cases/standing_wave/analyse.py analyse out/standing_wave [more runs] [--until 3] [--check 0.02] [--converging]
 
 polygon writes the water's outline (x y lines: the floor, then the surface from x = B back to 0 at --points
 points). analyse fits (left - right) / 2 of the two wave gauges (the first and last wave_gauge probes, near the
 end walls) with a exp(-delta t) cos(omega t + phi) over t <= --until and prints the period against theory, and the
 decay rate delta with the amplitude lost per period, 1 - exp(-delta T). B is the tank's (box wall's) inner length from
-the case, h is --depth (default 0.2 m). With --check TOL it exits 1 unless the period is within TOL of the
-theory (relative).
+the case, h is --depth (default 0.2 m). With --check TOL it exits 1 unless the period of the last run is within
+TOL of the theory (relative); with --converging, unless each run's period error is smaller in magnitude than the
+run's before it (give the runs from the coarsest to the finest).
 """
 import argparse
 import math
@@ -87,12 +88,15 @@ def main():
     pa.add_argument("runs", nargs="+")
     pa.add_argument("--depth", type=float, default=0.2, help="the still water depth h [m] (default 0.2)")
     pa.add_argument("--until", type=float, default=3.0, help="fit over t <= this [s]")
-    pa.add_argument("--check", type=float, metavar="TOL", help="exit 1 unless the period is within TOL (relative)")
+    pa.add_argument("--check", type=float, metavar="TOL", help="exit 1 unless the last run's period is within TOL (relative)")
+    pa.add_argument("--converging", action="store_true",
+                    help="exit 1 unless each run's period error is smaller than the one before (coarsest run first)")
     a = ap.parse_args()
     if a.command == "polygon":
         polygon(a)
         return
     failed = False
+    errors = []
     for run in a.runs:
         r = analyse_run(run, a)
         err = r["T"] / r["T_th"] - 1
@@ -100,9 +104,13 @@ def main():
         print(f"{run}: dp {r['dp']:g} m (h/dp {r['depth'] / r['dp']:.0f}), B {r['length']:g} m, h {r['depth']:g} m, "
               f"kh {r['kh']:.4f}: period {r['T']:.4f} s against {r['T_th']:.4f} s ({err * 100:+.2f} %); decay "
               f"{r['decay']:.4f} 1/s ({loss * 100:.1f} % of the amplitude per period); fit rms {r['rms'] * 1000:.2f} mm")
-        if a.check is not None and abs(err) > a.check:
-            print(f"  FAIL: the period within {a.check * 100:g} % expected")
+        if a.converging and errors and not abs(err) < abs(errors[-1]):
+            print(f"  FAIL: a period error smaller than the coarser run's ({errors[-1] * 100:+.2f} %) expected")
             failed = True
+        errors.append(err)
+    if a.check is not None and abs(errors[-1]) > a.check:
+        print(f"  FAIL: the last run's period within {a.check * 100:g} % expected")
+        failed = True
     sys.exit(1 if failed else 0)
 
 
