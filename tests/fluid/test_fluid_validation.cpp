@@ -181,8 +181,8 @@ TEST(FluidValidation, HydrostaticPressureAndVolume) {
 // the projection scheme and the case as it is otherwise, after 2 s: the largest fluid speed at most 1 % of
 // sqrt(g h) and the 99th percentile at most 0.3 %; the pressure within 2 % of rho g (h - y) at every fluid
 // particle more than 3 dp below the surface; the particle count conserved, and the volume: the mean height
-// of the water's top (the highest particle of each dp-wide column, plus dp/2) within 0.5 % of h. Measured
-// 0.049 %, 0.025 %, 0.45 %, top 0.9999 h; the standard scheme 16.6 %, 12.1 %, 92 %.
+// of the water's top (the highest particle of each dp-wide column, plus dp/2) within 0.5 % of h (figures in
+// docs/validation.md, "Fluid tests").
 TEST(FluidValidation, HydrostaticRest) {
   const CaseSpec spec = load_case(source_dir + "/cases/hydrostatic.yaml", {"fluid.scheme=projection"});
   Scene scene = build_scene(spec);
