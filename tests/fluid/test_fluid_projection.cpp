@@ -274,9 +274,9 @@ TEST(Projection, WaterAtRestStaysAtRestBeyondThePressureStiffness) {
 
 // The start from rest does not depend on dt (docs/validation.md, "The first step at a small dt"): water at
 // rest 0.2 m deep at dp 5 mm gets the same pressure from a first step of 1e-3 s and of 1e-5 s (every fluid
-// particle within 1e-4 rho g h), and stays at rest through 400 steps of 1e-5 s. With the start's shortfall in the
-// first step's rows over dt^2, the pressure after a step of 1e-5 s was a tenth of the hydrostatic one and the
-// water fell freely (3 % of sqrt(g h) at 4 ms).
+// particle within 1e-4 rho g h), and stays at rest through 400 steps of 1e-5 s. It fails if the start's own
+// density errors enter the first step's rows over dt^2: at a small dt they drive the rows below the surface
+// negative and the water falls.
 TEST(Projection, TheStartDoesNotDependOnDt) {
   // Solved tightly: the solve's absolute tolerance (fluid.density_tolerance) scales as 1 / dt^2.
   const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + "/cases/hydrostatic.yaml",
