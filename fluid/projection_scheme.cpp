@@ -27,6 +27,9 @@ struct Geometry {
   std::vector<Vec> dn_self;            ///< dn_k/dx_k
   std::vector<Vec> dn_pair;            ///< dn_j/dx_k for entry q (row k, neighbour j) of the near list
   std::vector<Real> lap_weight;        ///< the weight w(r_jk) at re_gradient of entry q (stabilisation)
+  /// Without lap_weight (a geometry for the rows alone, projection_geometry): the positions it was computed on,
+  /// from which operator_row takes the weights as it needs them.
+  const std::vector<Vec>* x = nullptr;
   std::vector<Real> n_kernel, c_of;    ///< each particle's kernel density, sum_j -w' r
   std::vector<Real> n_fluid;           ///< the fluid neighbours' part of n_kernel
   Real projection_scale = 0;           ///< d / C of the projection
@@ -66,7 +69,7 @@ class ProjectionScheme final : public PressureScheme {
   void initial_state(FluidStepReport& report) override {
     reference_densities();
     core.refresh_ghosts({reference_density_field}, report);
-    start_position = p.position;  // owned and ghosts: the first step's displacements (build_gram)
+    start_position = p.position;  // owned and ghosts: the first step's displacements (prepare_rows)
     start_compressibility = 1e-4 / std::pow(std::max(water_extent(), dp), 2);
   }
 
@@ -93,7 +96,7 @@ class ProjectionScheme final : public PressureScheme {
     linear_source = initial_step();
     // The first solve on the positions before the step moved them.
     projection_geometry(linear_source ? start_position : p.position);
-    gram_ready = false;
+    rows_ready = false;
   }
 
   void assemble(const Real dt) override { assemble_projection(dt); }
@@ -127,7 +130,7 @@ class ProjectionScheme final : public PressureScheme {
 
   /// The projection, first step, at the initial positions: the reference densities (reference_density_field),
   /// and each row's density error before the step moves anything (initial_error, by the rows' definition of
-  /// build_gram).
+  /// prepare_rows).
   void reference_densities() {
     auto& reference = p.scalar_field(reference_density_field);
     initial_error.assign(p.n_owned(), 0.0);
@@ -168,21 +171,37 @@ class ProjectionScheme final : public PressureScheme {
   /// and the scale d / C of the force, C the mean over the interior fluid particles of sum_j -w'(r_ij) r_ij
   /// (sum_j re / r_ij = n0 + N0 on the lattice for the MPS weight), so that -(d/C) N^T p is -grad p for a
   /// linear pressure on the current arrangement.
-  void projection_geometry(const std::vector<Vec>& x) {
+  ///
+  /// `for_correction` false: the geometry serves the rows alone (start_from_rest's offsets, while `x` lives):
+  /// without G the pairs' derivatives, which only the correction and G read, are not kept (dn_pair is then
+  /// empty), nor the stabilisation's weights.
+  void projection_geometry(const std::vector<Vec>& x, const bool for_correction = true) {
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n = near.n_particles();
     // The near list holds the pairs within re_g of particles that take part (build_near_list): entry q of
     // row k, neighbour j, gets dn_j/dx_k; by the symmetry of w, dn_k/dx_k is their sum.
     // Also the kernel's number density n_k and sum_j -w'(r_jk) r_jk (C of the particle).
-    geo.dn_pair.resize(near.n_pairs());
-    geo.lap_weight.resize(step_alpha > 0 ? near.n_pairs() : 0);
+    // Without G (stabilisation 1) only the fluid particles' derivatives are used (the correction, the surface
+    // pressures, C); the others' rows need their densities and the stabilisation's weights alone.
+    geo.all_derivatives = step_alpha < 1;
+    const bool keep_pairs = for_correction || geo.all_derivatives;
+    // Likewise the stabilisation's weights, which such a geometry's rows take from the positions.
+    const bool keep_weights = for_correction && step_alpha > 0;
+    if (keep_pairs) {
+      geo.dn_pair.resize(near.n_pairs());
+    } else {
+      std::vector<Vec>().swap(geo.dn_pair);
+    }
+    if (keep_weights) {
+      geo.lap_weight.resize(near.n_pairs());
+    } else {
+      std::vector<Real>().swap(geo.lap_weight);
+    }
+    geo.x = !for_correction && step_alpha > 0 ? &x : nullptr;
     geo.dn_self.resize(n);
     geo.n_kernel.resize(n);
     geo.n_fluid.resize(n);
     geo.c_of.resize(n);
-    // Without G (stabilisation 1) only the fluid particles' derivatives are used (the correction, the surface
-    // pressures, C); the others' rows need their densities and the stabilisation's weights alone.
-    geo.all_derivatives = step_alpha < 1;
     for (std::size_t k = 0; k < n; ++k) {
       Vec s = Vec::Zero();
       Real n_k = 0, n_f = 0, c_k = 0;
@@ -192,9 +211,10 @@ class ProjectionScheme final : public PressureScheme {
           const Vec r_jk = x[k] - x[j];
           const Real r = r_jk.norm();
           const KernelValue kv = kernel_at(kernel, r, re_p);
-          geo.dn_pair[q] = (kv.dw / r) * r_jk;
-          if (step_alpha > 0) geo.lap_weight[q] = weight(r, re_g);
-          s += geo.dn_pair[q];
+          const Vec dn = (kv.dw / r) * r_jk;
+          if (keep_pairs) geo.dn_pair[q] = dn;
+          if (keep_weights) geo.lap_weight[q] = weight(r, re_g);
+          s += dn;
           n_k += kv.w;
           if (roles[j] == Role::fluid) n_f += kv.w;
           c_k -= kv.dw * r;
@@ -204,7 +224,7 @@ class ProjectionScheme final : public PressureScheme {
           const auto j = static_cast<std::size_t>(near.index[q]);
           const Real r = (x[k] - x[j]).norm();
           const Real w = kernel_at(kernel, r, re_p).w;
-          if (step_alpha > 0) geo.lap_weight[q] = weight(r, re_g);
+          if (keep_weights) geo.lap_weight[q] = weight(r, re_g);
           n_k += w;
           if (roles[j] == Role::fluid) n_f += w;
         }
@@ -296,9 +316,12 @@ class ProjectionScheme final : public PressureScheme {
   /// the force moves). L_g is minus the Laplacian of eq. 12 at re_gradient over the row neighbours (pair
   /// weights 2d w_ij / (lambda n0)), s = C / (d n0) its factor to G's long-wave limit, so that alpha changes
   /// neither a smooth pressure nor the hydrostatic one in the bulk, and damps the oscillating pressures that G
-  /// alone leaves free (N^T p of a checkerboard p is nearly zero). Built once per step, after the rows are
-  /// numbered (assemble), and filtered by the active set at each solve.
-  void build_gram(const Real dt) {
+  /// alone leaves free (N^T p of a checkerboard p is nearly zero). The operator is not stored: prepare_rows
+  /// sets up what its rows need once per step, after the rows are numbered (assemble), and operator_row
+  /// computes a row where it is read (the system's layout, a row the active set rewrites, a wall row's
+  /// complementarity test). The first step's G couples particles two kernel radii apart, and a stored copy
+  /// beside the system's would double the largest arrays of the run.
+  void prepare_rows(const Real dt) {
     const std::size_t n_rows = particle_of_row.size();
     const auto& rest_offset = p.scalar_field(rest_offset_field);
     const auto& rest_rate = p.scalar_field(rest_rate_field);
@@ -307,43 +330,15 @@ class ProjectionScheme final : public PressureScheme {
     acc.assign(n_columns, 0.0);
     lap_acc.assign(n_columns, 0.0);
     touched_flag.assign(n_columns, 0);
-    touched.resize(n_columns);  // the columns of the row being built: touched[0, n_touched)
-    std::size_t n_touched = 0;
-    gram_ptr.assign(n_rows + 1, 0);
-    gram_col.clear();
-    gram_val.clear();
+    touched.resize(n_columns);  // the columns of the row being built
     // Each particle's pressure unknown (column_of), once.
     column_of_particle.resize(p.size());
     for (std::size_t j = 0; j < column_of_particle.size(); ++j) column_of_particle[j] = column_of(j);
     column_particle.assign(n_columns, 0);
     for (std::size_t j = 0; j < p.size(); ++j)
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
-    const Real scale = (1.0 - step_alpha) * geo.projection_scale / n0_kernel;
-    const Real lap_scale = step_alpha / (geo.projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
-    const auto touch = [&](const std::size_t col) {
-      if (!touched_flag[col]) {
-        touched_flag[col] = 1;
-        touched[n_touched++] = static_cast<LocalIndex>(col);
-      }
-    };
-    const auto add_column = [&](const std::size_t col, const Real v) {
-      touch(col);
-      acc[col] += v;
-    };
-    const auto add = [&](const std::size_t j, const Real v) { add_column(static_cast<std::size_t>(row_of[j]), v); };
-    const auto add_laplacian_column = [&](const std::size_t col, const Real v) {
-      touch(col);
-      lap_acc[col] += v;
-    };
-    // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
-    // (geo.dn_pair of row k's entries).
-    const auto visit_k = [&](const std::size_t k, const Vec& n_ik) {
-      if (has_row(roles[k])) add(k, n_ik.dot(geo.dn_self[k]));
-      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
-        const LocalIndex col = column_of_particle[static_cast<std::size_t>(near.index[q])];
-        if (col >= 0) add_column(static_cast<std::size_t>(col), n_ik.dot(geo.dn_pair[q]));
-      }
-    };
+    row_scale = (1.0 - step_alpha) * geo.projection_scale / n0_kernel;
+    row_lap_scale = step_alpha / (geo.projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
     // The members of each row's wall group (dummies whose parent is the row's particle).
     member_ptr.assign(n_rows + 1, 0);
     for (std::size_t m = 0; m < geo.parent_of.size(); ++m)
@@ -377,63 +372,90 @@ class ProjectionScheme final : public PressureScheme {
       row_error[r] = n_i - n0_kernel + rest_offset[i] + rest_rate[i] * dt * dt;
       for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) row_error[r] += geo.group_error[static_cast<std::size_t>(members[e])];
     }
-    for (std::size_t r = 0; r < n_rows; ++r) {
-      const auto i = static_cast<std::size_t>(particle_of_row[r]);
-      if (step_alpha < 1) {  // G (at alpha = 1 the matrix is the scaled Laplacian alone)
-        assert(geo.all_derivatives);
-        if (roles[i] == Role::fluid) visit_k(i, geo.dn_self[i]);
-        // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
-        for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
+  }
+
+  /// Row r of the operator (prepare_rows) into row_col / row_val, its columns sorted.
+  void operator_row(const std::size_t r) {
+    std::size_t n_touched = 0;
+    const auto touch = [&](const std::size_t col) {
+      if (!touched_flag[col]) {
+        touched_flag[col] = 1;
+        touched[n_touched++] = static_cast<LocalIndex>(col);
+      }
+    };
+    const auto add_column = [&](const std::size_t col, const Real v) {
+      touch(col);
+      acc[col] += v;
+    };
+    const auto add = [&](const std::size_t j, const Real v) { add_column(static_cast<std::size_t>(row_of[j]), v); };
+    const auto add_laplacian_column = [&](const std::size_t col, const Real v) {
+      touch(col);
+      lap_acc[col] += v;
+    };
+    // Moving k (N_ik given) adds N_ik . N_jk to the entries (i, j): j = k and the row neighbours j of k
+    // (geo.dn_pair of row k's entries).
+    const auto visit_k = [&](const std::size_t k, const Vec& n_ik) {
+      if (has_row(roles[k])) add(k, n_ik.dot(geo.dn_self[k]));
+      for (std::size_t q = near.begin(k); q < near.end(k); ++q) {
+        const LocalIndex col = column_of_particle[static_cast<std::size_t>(near.index[q])];
+        if (col >= 0) add_column(static_cast<std::size_t>(col), n_ik.dot(geo.dn_pair[q]));
+      }
+    };
+    const auto i = static_cast<std::size_t>(particle_of_row[r]);
+    if (step_alpha < 1) {  // G (at alpha = 1 the matrix is the scaled Laplacian alone)
+      assert(geo.all_derivatives);
+      if (roles[i] == Role::fluid) visit_k(i, geo.dn_self[i]);
+      // Entry q of row i, neighbour k, holds dn_k/dx_i = -dn_i/dx_k; likewise for the group's dummies.
+      for (std::size_t q = near.begin(i); q < near.end(i); ++q) {
+        const auto k = static_cast<std::size_t>(near.index[q]);
+        if (roles[k] == Role::fluid) visit_k(k, -geo.dn_pair[q]);
+      }
+      for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) {
+        const auto m = static_cast<std::size_t>(members[e]);
+        for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
           const auto k = static_cast<std::size_t>(near.index[q]);
           if (roles[k] == Role::fluid) visit_k(k, -geo.dn_pair[q]);
         }
-        for (std::size_t e = member_ptr[r]; e < member_ptr[r + 1]; ++e) {
-          const auto m = static_cast<std::size_t>(members[e]);
-          for (std::size_t q = near.begin(m); q < near.end(m); ++q) {
-            const auto k = static_cast<std::size_t>(near.index[q]);
-            if (roles[k] == Role::fluid) visit_k(k, -geo.dn_pair[q]);
-          }
+      }
+    }
+    if (step_alpha > 0)
+      // The pairs of the row's group (its particle and its dummies) with the other groups' particles.
+      for (std::size_t e = member_ptr[r]; e <= member_ptr[r + 1]; ++e) {
+        const std::size_t a = e < member_ptr[r + 1] ? static_cast<std::size_t>(members[e]) : i;
+        for (std::size_t q = near.begin(a); q < near.end(a); ++q) {
+          const auto j = static_cast<std::size_t>(near.index[q]);
+          const LocalIndex col = column_of_particle[j];
+          if (col < 0 || static_cast<std::size_t>(col) == r) continue;
+          const Real v = row_lap_scale * (geo.x ? weight(((*geo.x)[a] - (*geo.x)[j]).norm(), re_g) : geo.lap_weight[q]);
+          add_laplacian_column(static_cast<std::size_t>(col), -v);
+          add_laplacian_column(r, v);
         }
       }
-      if (step_alpha > 0)
-        // The pairs of the row's group (its particle and its dummies) with the other groups' particles.
-        for (std::size_t e = member_ptr[r]; e <= member_ptr[r + 1]; ++e) {
-          const std::size_t a = e < member_ptr[r + 1] ? static_cast<std::size_t>(members[e]) : i;
-          for (std::size_t q = near.begin(a); q < near.end(a); ++q) {
-            const auto j = static_cast<std::size_t>(near.index[q]);
-            const LocalIndex col = column_of_particle[j];
-            if (col < 0 || static_cast<std::size_t>(col) == r) continue;
-            const Real v = lap_scale * geo.lap_weight[q];
-            add_laplacian_column(static_cast<std::size_t>(col), -v);
-            add_laplacian_column(r, v);
-          }
-        }
-      touch(r);
-      std::sort(touched.begin(), touched.begin() + static_cast<std::ptrdiff_t>(n_touched));
-      for (std::size_t t = 0; t < n_touched; ++t) {
-        const LocalIndex col = touched[t];
-        const auto q = static_cast<std::size_t>(col);
-        gram_col.push_back(col);
-        gram_val.push_back(scale * acc[q] + lap_acc[q]);
-        acc[q] = 0;
-        lap_acc[q] = 0;
-        touched_flag[q] = 0;
-      }
-      n_touched = 0;
-      gram_ptr[r + 1] = gram_col.size();
+    touch(r);
+    std::sort(touched.begin(), touched.begin() + static_cast<std::ptrdiff_t>(n_touched));
+    row_col.resize(n_touched);
+    row_val.resize(n_touched);
+    for (std::size_t t = 0; t < n_touched; ++t) {
+      const LocalIndex col = touched[t];
+      const auto q = static_cast<std::size_t>(col);
+      row_col[t] = col;
+      row_val[t] = row_scale * acc[q] + lap_acc[q];
+      acc[q] = 0;
+      lap_acc[q] = 0;
+      touched_flag[q] = 0;
     }
   }
 
-  /// The rows of the projection: G p + p / (c^2 dt^2) = kappa rho / dt^2 (n*_i - n0) / n0 (build_gram) over the
-  /// rows and columns that are not free surface; free-surface rows p = 0. The first assembly of a step lays
+  /// The rows of the projection: G p + p / (c^2 dt^2) = kappa rho / dt^2 (n*_i - n0) / n0 (prepare_rows) over
+  /// the rows and columns that are not free surface; free-surface rows p = 0. The first assembly of a step lays
   /// out every row's entries whatever its flag (a free-surface row or column holds zeros off the diagonal),
   /// except the dry rows', which stay free surface through the step; the active set's re-solves then write
   /// only the rows whose flag or a column's flag changed (LocalRows::values_only).
   void assemble_projection(const Real dt) {
-    const bool layout = !gram_ready;
-    if (!gram_ready) {
-      build_gram(dt);
-      gram_ready = true;
+    const bool layout = !rows_ready;
+    if (!rows_ready) {
+      prepare_rows(dt);
+      rows_ready = true;
     }
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
     const std::size_t n_rows = particle_of_row.size();
@@ -450,73 +472,77 @@ class ProjectionScheme final : public PressureScheme {
       // A dry row of this rank's: free surface through the step, no entry in its column.
       column_dry.assign(n_columns, 0);
       for (std::size_t q = 0; q < n_rows; ++q) column_dry[q] = dry[static_cast<std::size_t>(column_particle[q])];
-      // The entries: a dry row its diagonal alone, the others G's entries in the columns that are not dry.
-      sys.col.resize(gram_col.size() + n_rows);  // at most
-      std::size_t n_entries = 0;
+      // The entries: a dry row its diagonal alone, the others the operator's entries in the columns that are
+      // not dry. The arrays keep their capacity between steps.
+      sys.col.clear();
+      sys.value.clear();
       sys.row_ptr[0] = 0;
+      remote_rows.clear();  // the rows with an entry in a column of another rank's row
       for (std::size_t r = 0; r < n_rows; ++r) {
         if (column_dry[r]) {
-          sys.col[n_entries++] = static_cast<LocalIndex>(r);
+          sys.col.push_back(static_cast<LocalIndex>(r));
+          row_col.clear();  // a dry row is a free-surface row: its diagonal alone
+          row_val.clear();
         } else {
-          for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
-            if (!column_dry[static_cast<std::size_t>(gram_col[e])]) sys.col[n_entries++] = gram_col[e];
+          operator_row(r);
+          for (const LocalIndex q : row_col)
+            if (!column_dry[static_cast<std::size_t>(q)]) sys.col.push_back(q);
+          if (!row_col.empty() && static_cast<std::size_t>(row_col.back()) >= n_rows) remote_rows.push_back(static_cast<LocalIndex>(r));
         }
-        sys.row_ptr[r + 1] = n_entries;
+        sys.row_ptr[r + 1] = sys.col.size();
+        sys.value.resize(sys.col.size());
+        write_row(r);
       }
-      sys.col.resize(n_entries);
-      sys.value.resize(n_entries);
-      remote_rows.clear();  // the rows with an entry in a column of another rank's row
-      for (std::size_t r = 0; r < n_rows; ++r)
-        if (gram_ptr[r + 1] > gram_ptr[r] && static_cast<std::size_t>(gram_col[gram_ptr[r + 1] - 1]) >= n_rows)
-          remote_rows.push_back(static_cast<LocalIndex>(r));
       assert(pattern_is_symmetric());
-      for (std::size_t r = 0; r < n_rows; ++r) write_row(r);
       assembled_column_surface = column_surface;
       return;
     }
     // The columns whose free-surface flag changed since the last assembly; a row is rewritten when its own
-    // column (r) or one of its entries' did. G's pattern is symmetric (pattern_is_symmetric), so the rows with an
+    // column (r) or one of its entries' did. The pattern is symmetric (pattern_is_symmetric), so the rows with an
     // entry in a changed column of this rank's are that column's own entries; a changed column of another rank's
-    // row is looked for in the rows that have such columns (remote_rows).
+    // row is looked for in the rows that have such columns (remote_rows). A dry column never changes.
     const auto changed_column = [&](const std::size_t q) { return column_surface[q] != assembled_column_surface[q]; };
     rewrite.assign(n_rows, 0);
     for (std::size_t q = 0; q < n_rows; ++q) {
       if (!changed_column(q)) continue;
       rewrite[q] = 1;
-      for (std::size_t e = gram_ptr[q]; e < gram_ptr[q + 1]; ++e)
-        if (static_cast<std::size_t>(gram_col[e]) < n_rows) rewrite[static_cast<std::size_t>(gram_col[e])] = 1;
+      for (std::size_t e = sys.row_ptr[q]; e < sys.row_ptr[q + 1]; ++e)
+        if (static_cast<std::size_t>(sys.col[e]) < n_rows) rewrite[static_cast<std::size_t>(sys.col[e])] = 1;
     }
     bool remote_changed = false;
     for (std::size_t q = n_rows; q < n_columns && !remote_changed; ++q) remote_changed = changed_column(q);
     if (remote_changed)
       for (const LocalIndex r : remote_rows)
-        for (std::size_t e = gram_ptr[static_cast<std::size_t>(r)]; e < gram_ptr[static_cast<std::size_t>(r) + 1]; ++e)
-          if (changed_column(static_cast<std::size_t>(gram_col[e]))) rewrite[static_cast<std::size_t>(r)] = 1;
+        for (std::size_t e = sys.row_ptr[static_cast<std::size_t>(r)]; e < sys.row_ptr[static_cast<std::size_t>(r) + 1]; ++e)
+          if (changed_column(static_cast<std::size_t>(sys.col[e]))) rewrite[static_cast<std::size_t>(r)] = 1;
     for (std::size_t r = 0; r < n_rows; ++r) {
       if (!rewrite[r] || column_dry[r]) continue;
+      operator_row(r);
       write_row(r);
       sys.changed_rows.push_back(static_cast<LocalIndex>(r));
     }
     assembled_column_surface = column_surface;
   }
 
-  /// Whether every entry (r, c) of G between two rows of this rank's has its transpose (c, r) (build_gram: the
-  /// pairs of the near list, which holds both directions, and G = N N^T).
+  /// Whether every entry (r, c) of the system between two rows of this rank's has its transpose (c, r) (the
+  /// operator's pattern: the pairs of the near list, which holds both directions, and G = N N^T; the dry rows
+  /// and columns left out alike).
   bool pattern_is_symmetric() const {
     const std::size_t n_rows = particle_of_row.size();
     for (std::size_t r = 0; r < n_rows; ++r)
-      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
-        const auto c = static_cast<std::size_t>(gram_col[e]);
+      for (std::size_t e = sys.row_ptr[r]; e < sys.row_ptr[r + 1]; ++e) {
+        const auto c = static_cast<std::size_t>(sys.col[e]);
         if (c >= n_rows) continue;
-        if (!std::binary_search(gram_col.begin() + static_cast<std::ptrdiff_t>(gram_ptr[c]),
-                                gram_col.begin() + static_cast<std::ptrdiff_t>(gram_ptr[c + 1]), static_cast<LocalIndex>(r)))
+        if (!std::binary_search(sys.col.begin() + static_cast<std::ptrdiff_t>(sys.row_ptr[c]),
+                                sys.col.begin() + static_cast<std::ptrdiff_t>(sys.row_ptr[c + 1]), static_cast<LocalIndex>(r)))
           return false;
       }
     return true;
   }
 
-  /// Row r's values and right-hand side on the entries assemble_projection laid out (the free-surface flags by
-  /// column, column_surface; row r's particle is column r's).
+  /// Row r's values and right-hand side on the entries assemble_projection laid out, from the operator's row r
+  /// in row_col / row_val (operator_row; a dry row's diagonal alone needs none) and the free-surface flags by
+  /// column, column_surface (row r's particle is column r's).
   void write_row(const std::size_t r) {
     Real* value = sys.value.data() + sys.row_ptr[r];
     if (column_surface[r]) {
@@ -528,11 +554,11 @@ class ProjectionScheme final : public PressureScheme {
       return;
     }
     sys.rhs[r] = projection_source * row_error[r];
-    for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e) {
-      const auto q = static_cast<std::size_t>(gram_col[e]);
-      if (column_surface[q]) sys.rhs[r] -= gram_val[e] * surface_pressure_of_column(q);
+    for (std::size_t e = 0; e < row_col.size(); ++e) {
+      const auto q = static_cast<std::size_t>(row_col[e]);
+      if (column_surface[q]) sys.rhs[r] -= row_val[e] * surface_pressure_of_column(q);
       if (column_dry[q]) continue;
-      *value++ = column_surface[q] ? 0.0 : gram_val[e] + (q == r ? row_compress : 0.0);
+      *value++ = column_surface[q] ? 0.0 : row_val[e] + (q == r ? row_compress : 0.0);
     }
   }
 
@@ -570,7 +596,7 @@ class ProjectionScheme final : public PressureScheme {
       if (!additions || dry[i]) continue;
       if (roles[i] == Role::fluid) {
         // The particle's own density: in the first step its error at the start too, which that step's rows
-        // leave out (build_gram), so that a free-surface particle of the start, short of neighbours, is not
+        // leave out (prepare_rows), so that a free-surface particle of the start, short of neighbours, is not
         // taken for a compressed one.
         const Real start_error = linear_source ? initial_error[i] : 0.0;
         if (start_error + row_error[r] + dt * density_change(i, false, [&](const std::size_t j) { return trial_dv[j]; }) >
@@ -581,8 +607,9 @@ class ProjectionScheme final : public PressureScheme {
         continue;
       }
       Real w = -projection_source * row_error[r];
-      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
-        w += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
+      operator_row(r);
+      for (std::size_t e = 0; e < row_col.size(); ++e)
+        w += row_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(row_col[e])])];
       if (w < -w_tolerance) {
         surface[i] = 0;
         changed = 1;
@@ -616,8 +643,8 @@ class ProjectionScheme final : public PressureScheme {
     std::vector<Vec> rest_position = p.position;
     for (std::size_t j = 0; j < rest_position.size(); ++j)
       if (roles[j] != Role::fluid) rest_position[j] = start_position[j];
-    projection_geometry(rest_position);
-    build_gram(dt);  // G' of the later steps (the offsets are still 0: row_error is b)
+    projection_geometry(rest_position, false);
+    prepare_rows(dt);  // G' of the later steps (the offsets are still 0: row_error is b)
     auto& rest_offset = p.scalar_field(rest_offset_field);
     auto& rest_rate = p.scalar_field(rest_rate_field);
     const auto& surface = p.scalar_field(fluid_fields::free_surface);
@@ -627,8 +654,9 @@ class ProjectionScheme final : public PressureScheme {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (surface[i] != 0) continue;
       Real g_p = 0;  // (G' p0)_r, free-surface columns at their pressure
-      for (std::size_t e = gram_ptr[r]; e < gram_ptr[r + 1]; ++e)
-        g_p += gram_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(gram_col[e])])];
+      operator_row(r);
+      for (std::size_t e = 0; e < row_col.size(); ++e)
+        g_p += row_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(row_col[e])])];
       rest_offset[i] = pressure[i] * n0_kernel / (kappa * rho * c * c) - initial_error[i];
       rest_rate[i] = (g_p / s - (row_error[r] - initial_error[i])) / (dt * dt);
     }
@@ -737,13 +765,13 @@ class ProjectionScheme final : public PressureScheme {
   std::vector<Real> lap_acc;             ///< ... and the stabilisation)
   std::vector<std::uint8_t> touched_flag;
   std::vector<LocalIndex> touched;
-  std::vector<LocalIndex> column_of_particle;  ///< projection: column_of of each particle in the near list (build_gram)
-  std::vector<std::size_t> gram_ptr;     ///< projection: the operator G of build_gram (CRS, sorted columns)
-  std::vector<LocalIndex> gram_col;
-  std::vector<Real> gram_val;
+  std::vector<LocalIndex> column_of_particle;  ///< projection: column_of of each particle in the near list (prepare_rows)
+  std::vector<LocalIndex> row_col;       ///< projection: the operator's row of the last operator_row (sorted columns)
+  std::vector<Real> row_val;
+  Real row_scale = 0, row_lap_scale = 0;    ///< projection: the factors of G and of the stabilisation (prepare_rows)
   std::vector<LocalIndex> column_particle;  ///< projection: the particle of each column
-  bool gram_ready = false;                  ///< G built for this step
-  /// The first solve's rows take the density change of the step's displacements to first order (build_gram):
+  bool rows_ready = false;                  ///< prepare_rows done for this step
+  /// The first solve's rows take the density change of the step's displacements to first order (prepare_rows):
   /// the error that G's correction removes, so that p0 does not depend on how far dt moves the fluid.
   bool linear_source = false;
   std::vector<Vec> start_position;          ///< the first step: every particle's position before it moves
