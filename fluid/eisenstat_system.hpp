@@ -89,10 +89,10 @@ class EisenstatSystem final : public OP {
       other.ptr[i + 1] = other.ptr[i] + static_cast<int>(e - o);
       if (o != e) other_row.push_back(static_cast<int>(i));
     }
-    resize_with_headroom(lower.col, static_cast<std::size_t>(lower.ptr[n]));
-    resize_with_headroom(lower.val, lower.col.size());
-    resize_with_headroom(other.col, static_cast<std::size_t>(other.ptr[n]));
-    resize_with_headroom(other.val, other.col.size());
+    fit_with_headroom(lower.col, static_cast<std::size_t>(lower.ptr[n]));
+    fit_with_headroom(lower.val, lower.col.size());
+    fit_with_headroom(other.col, static_cast<std::size_t>(other.ptr[n]));
+    fit_with_headroom(other.val, other.col.size());
     diag.resize(n);
     inv_dprime.resize(n);
     sqrt_dprime.resize(n);

@@ -5,6 +5,7 @@
 // transpose N^T p with its stiffness capped (fluid/fluid_solver.hpp, stiffness_number).
 #include "fluid/pressure_scheme.hpp"
 
+#include "core/buffers.hpp"
 #include "core/kernel.hpp"
 #include "core/operators.hpp"
 
@@ -493,6 +494,8 @@ class ProjectionScheme final : public PressureScheme {
         sys.value.resize(sys.col.size());
         write_row(r);
       }
+      trim_oversized(sys.col);  // the first step's system is the widest of the run
+      trim_oversized(sys.value);
       assert(pattern_is_symmetric());
       assembled_column_surface = column_surface;
       return;
