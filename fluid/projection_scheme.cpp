@@ -447,6 +447,14 @@ class ProjectionScheme final : public PressureScheme {
     }
   }
 
+  /// sum + (operator x)_r, every column at its particle's value of x (computes row r: operator_row).
+  Real add_row_times(const std::size_t r, const std::vector<Real>& x, Real sum) {
+    operator_row(r);
+    for (std::size_t e = 0; e < row_col.size(); ++e)
+      sum += row_val[e] * x[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(row_col[e])])];
+    return sum;
+  }
+
   /// The rows of the projection: G p + p / (c^2 dt^2) = kappa rho / dt^2 (n*_i - n0) / n0 (prepare_rows) over
   /// the rows and columns that are not free surface; free-surface rows p = 0. The first assembly of a step lays
   /// out every row's entries whatever its flag (a free-surface row or column holds zeros off the diagonal),
@@ -474,7 +482,7 @@ class ProjectionScheme final : public PressureScheme {
       column_dry.assign(n_columns, 0);
       for (std::size_t q = 0; q < n_rows; ++q) column_dry[q] = dry[static_cast<std::size_t>(column_particle[q])];
       // The entries: a dry row its diagonal alone, the others the operator's entries in the columns that are
-      // not dry. The arrays keep their capacity between steps.
+      // not dry. The arrays keep their capacity between steps unless it is far above the size (trim_oversized).
       sys.col.clear();
       sys.value.clear();
       sys.row_ptr[0] = 0;
@@ -609,10 +617,7 @@ class ProjectionScheme final : public PressureScheme {
         }
         continue;
       }
-      Real w = -projection_source * row_error[r];
-      operator_row(r);
-      for (std::size_t e = 0; e < row_col.size(); ++e)
-        w += row_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(row_col[e])])];
+      const Real w = add_row_times(r, pressure, -projection_source * row_error[r]);
       if (w < -w_tolerance) {
         surface[i] = 0;
         changed = 1;
@@ -656,10 +661,7 @@ class ProjectionScheme final : public PressureScheme {
     for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
       if (surface[i] != 0) continue;
-      Real g_p = 0;  // (G' p0)_r, free-surface columns at their pressure
-      operator_row(r);
-      for (std::size_t e = 0; e < row_col.size(); ++e)
-        g_p += row_val[e] * pressure[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(row_col[e])])];
+      const Real g_p = add_row_times(r, pressure, 0.0);  // (G' p0)_r, free-surface columns at their pressure
       rest_offset[i] = pressure[i] * n0_kernel / (kappa * rho * c * c) - initial_error[i];
       rest_rate[i] = (g_p / s - (row_error[r] - initial_error[i])) / (dt * dt);
     }
