@@ -80,8 +80,9 @@ Real fluid_interaction_radius(const FluidSetup& setup);
 
 /// Work of one particle of `kind` in a fluid step relative to a fluid particle, for the partition of the
 /// particles over the ranks: every particle is in the neighbour search, walls also have pressure rows, fluid
-/// particles also the explicit phases (docs/performance.md, ## Parallel runs). Other kinds: 1. A wall or dummy
-/// particle that took no part in the last fluid step (far from the fluid, `takes_part` false) costs little.
+/// particles also the explicit phases (docs/performance.md, ## Parallel runs); the weights differ by dimension.
+/// Other kinds: 1. A wall or dummy particle that took no part in the last fluid step (far from the fluid,
+/// `takes_part` false) costs little.
 Real fluid_work_weight(ParticleKind kind, bool takes_part = true);
 /// fluid_work_weight of the first n particles of p, with the marks of the last fluid step where p has them (a
 /// set the fluid has not stepped yet: every particle takes part).
@@ -159,6 +160,8 @@ class FluidSolver : public Participant {
   const std::vector<LocalIndex>& row_particles() const;
   const LatticeConstants& lattice_gradient() const;
   const LatticeConstants& lattice_laplacian() const;
+  /// The cell side [m] that the neighbour lists are searched with and the particles are kept in cell order by.
+  Real cell_size() const;
 
  private:
   struct Impl;

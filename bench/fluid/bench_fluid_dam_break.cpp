@@ -2,7 +2,8 @@
 // (about 16,200 fluid particles; the 3D build: cases/3d/dam_break.yaml at its dp), on the ranks of mpirun with
 // the particles distributed: milliseconds per step (the slowest rank) split into neighbour search, PPE
 // assembly, preconditioner setup, solve (with iterations), halo (owners, ghosts, refreshes) and the rest; peak
-// memory per rank and per particle; ghosts and halo bytes.
+// memory per rank and per particle; ghosts and halo bytes; each rank's phases and its share of the particles (by
+// kind, the partition weight, the ghosts, the pressure rows).
 // Usage: [mpirun -np R] bench_fluid_dam_break [preconditioner [n_steps [dp [extra --set overrides...]]]]
 // Results go to docs/performance.md (## Fluid).
 #include "core/distribution.hpp"
@@ -15,6 +16,7 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <numeric>
 #include <string>
 
 using namespace mpsfsi;
@@ -91,16 +93,32 @@ int main(int argc, char** argv) {
     double halo[2] = {static_cast<double>(halo_bytes), static_cast<double>(ghosts)};
     MPI_Allreduce(MPI_IN_PLACE, halo, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     const double ms = 1e3 / n_steps;
-    {  // owned particles per rank at the end
-      unsigned long long mine[6] = {p.n_owned(), 0, 0, 0, 0, 0};
-      std::vector<unsigned long long> all(6 * static_cast<std::size_t>(n_ranks));
-      for (std::size_t i = 0; i < p.n_owned(); ++i) ++mine[1 + std::min(2, static_cast<int>(p.kind[i]))];
+    {  // each rank's share at the end: what the partition weighs (fluid_work_weights) against what it costs
+      constexpr int n_counts = 14;
+      const std::vector<Real> w = fluid_work_weights(p, p.n_owned());
+      // owned: all, fluid, wall, dummy; pressure rows of fluid and of walls; walls and dummies that took part in
+      // the last step; the weight; ghosts: fluid, wall, dummy; the matrix's entries and its single-entry rows
+      unsigned long long mine[n_counts] = {p.n_owned()};
+      for (std::size_t i = 0; i < p.n_owned(); ++i) {
+        const int kind = std::min(2, static_cast<int>(p.kind[i]));
+        ++mine[1 + kind];
+        if (kind > 0 && w[i] > fluid_work_weight(p.kind[i], false)) ++mine[5 + kind];
+      }
       for (const LocalIndex r : fluid.row_particles())  // the last step's pressure rows: fluid and wall particles
         ++mine[p.kind[static_cast<std::size_t>(r)] == ParticleKind::fluid ? 4 : 5];
-      MPI_Gather(mine, 6, MPI_UNSIGNED_LONG_LONG, all.data(), 6, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
-      for (std::size_t q = 0; rank == 0 && q < static_cast<std::size_t>(n_ranks); ++q)
-        fmt::print("rank {}: {} owned ({} fluid, {} wall, {} dummy); pressure rows {} fluid, {} wall\n", q, all[6 * q],
-                   all[6 * q + 1], all[6 * q + 2], all[6 * q + 3], all[6 * q + 4], all[6 * q + 5]);
+      mine[8] = static_cast<unsigned long long>(std::accumulate(w.begin(), w.end(), 0.0));
+      for (std::size_t i = p.n_owned(); i < p.size(); ++i) ++mine[9 + std::min(2, static_cast<int>(p.kind[i]))];
+      const LocalRows& sys = fluid.last_system();
+      mine[12] = sys.row_ptr.empty() ? 0 : sys.row_ptr.back();
+      for (std::size_t r = 0; r + 1 < sys.row_ptr.size(); ++r) mine[13] += sys.row_ptr[r + 1] - sys.row_ptr[r] == 1;
+      std::vector<unsigned long long> all(n_counts * static_cast<std::size_t>(n_ranks));
+      MPI_Gather(mine, n_counts, MPI_UNSIGNED_LONG_LONG, all.data(), n_counts, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+      for (std::size_t q = 0; rank == 0 && q < static_cast<std::size_t>(n_ranks); ++q) {
+        const unsigned long long* c = all.data() + n_counts * q;
+        fmt::print("rank {}: {} owned ({} fluid, {} wall, {} dummy; taking part {} wall, {} dummy; weight {}); "
+                   "ghosts {} fluid, {} wall, {} dummy; pressure rows {} fluid, {} wall ({} entries, {} single)\n",
+                   q, c[0], c[1], c[2], c[3], c[6], c[7], c[8], c[9], c[10], c[11], c[4], c[5], c[12], c[13]);
+      }
     }
     if (rank == 0) {
       fmt::print("dam break dp {} m, {} particles ({} fluid), {} rank(s), preconditioner {}, tolerance {:.0e}, {} steps to t = {:.4f} s\n",

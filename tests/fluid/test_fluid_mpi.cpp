@@ -1,8 +1,12 @@
 // MPI test of the fluid (label mpi): the dam break advanced a few steps with its particles distributed over
 // all ranks of MPI_COMM_WORLD (core/distribution.hpp) must give, particle by particle (matched by global id),
 // the pressures and positions of a one-rank run (MPI_COMM_SELF) to solver tolerance, keep every particle
-// owned exactly once, and reach the true residual of the tolerance in every distributed solve.
+// owned exactly once, and reach the true residual of the tolerance in every distributed solve. After its fifth
+// step the distributed set is partitioned anew (with the fluid's weights, where the first partition had none):
+// the particles that move come after the others on their new rank, and the fluid's next step puts them back
+// in cell order.
 #include "core/distribution.hpp"
+#include "core/neighbours.hpp"
 #include "fluid/fluid_solver.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -45,6 +49,7 @@ int main(int argc, char** argv) {
     FluidSolver serial(fluid_setup(spec), ps, self);
     FluidSolver dist(fluid_setup(spec), pd, world);
     Real t = 0;
+    unsigned long long moved = 0;  // particles the partition after step 5 moved to another rank
     for (int step = 0; step < 20; ++step) {
       const Real dt = serial.stable_dt();
       const Real dt_dist = dist.stable_dt();
@@ -79,6 +84,27 @@ int main(int argc, char** argv) {
                     size, preconditioner.c_str(), step + 1, r.iterations, r.residual, size, diff[0] / p_max, size,
                     diff[1], n_owned, ps.size(), ok ? "ok" : "FAILED");
       failures += !ok;
+      if (step == 4 + 1) {  // the step after the partition below: the owned particles are in cell order again
+        const std::vector<Vec> x(pd.position.begin(), pd.position.begin() + static_cast<std::ptrdiff_t>(pd.n_owned()));
+        const std::vector<LocalIndex> order = cell_order(x, dist.cell_size());
+        // How far each particle is from its place in cell order, as a fraction of the rank's particles: in
+        // cell order up to the cells the particles crossed in the step; a particle that a partition appended
+        // is about half the rank's particles away from its place.
+        double shift = 0;
+        for (std::size_t k = 0; k < order.size(); ++k)
+          shift = std::max(shift, std::abs(static_cast<double>(order[k]) - static_cast<double>(k)) / static_cast<double>(order.size()));
+        MPI_Allreduce(MPI_IN_PLACE, &shift, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+        const bool ordered = shift < 0.05 && (size == 1 || moved > 0);
+        if (rank == 0)
+          std::printf("after the partition: %llu particles moved between ranks; the owned particles at most %.4f of a rank's "
+                      "count from their place in cell order %s\n", moved, shift, ordered ? "ok" : "FAILED");
+        failures += !ordered;
+      }
+      if (step == 4) {
+        world.partition(pd, fluid_work_weights(pd, pd.n_owned()));
+        moved = world.stats().n_migrated_out;
+        MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+      }
     }
   }
   int any = 0;
