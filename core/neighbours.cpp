@@ -92,11 +92,14 @@ __attribute__((noinline)) void sort_short_list(LocalIndex* a, const std::size_t 
 /// found in the (2 reach + 1)^d cells around it of `grid` (built over x with cells of side radius / reach).
 /// Rows q with has_row(q) false stay empty. With `support_only`, the pairs in_support of radius (core/kernel.hpp),
 /// by the same arithmetic. take_row(i, n_pairs) may write point i's row itself (appending at n_pairs, which it
-/// advances) and return true; otherwise the row is searched.
-template <bool support_only, class ParticleOf, class HasRow, class TakeRow>
+/// advances) and return true; otherwise the row is searched. With `two_blocks`, a searched row's neighbours
+/// j >= second_block are moved after the others (a stable partition), and each part is sorted on its own.
+template <bool support_only, bool two_blocks = false, class ParticleOf, class HasRow, class TakeRow>
 void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& particle_of, HasRow&& has_row,
                TakeRow&& take_row, const Real radius, const int reach, NeighbourList& out, const CellGrid& grid,
-               const bool sorted_lists) {
+               const bool sorted_lists, const std::size_t second_block = 0) {
+  thread_local std::vector<LocalIndex> late;  // a row's neighbours of the second block
+  thread_local std::vector<std::size_t> late_before;  // the grid's points of the second block before each one
   const Real r2 = radius * radius;
   const Real support2 = radius * radius * (1.0 - support_margin);
   out.radius = radius;
@@ -107,6 +110,12 @@ void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& part
   out.offset[0] = 0;
   const auto& sorted = grid.sorted();
   const auto& xs = grid.sorted_positions();
+  if constexpr (two_blocks) {
+    late_before.resize(sorted.size() + 1);
+    late_before[0] = 0;
+    for (std::size_t k = 0; k < sorted.size(); ++k)
+      late_before[k + 1] = late_before[k] + (static_cast<std::size_t>(sorted[k]) >= second_block);
+  }
   // Grid size in locals: the list writes below are ints and could alias the grid's members.
   CellGrid::Cell n_cells;
   for (int a = 0; a < dim; ++a) n_cells[a] = grid.n_cells(a);
@@ -133,12 +142,14 @@ void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& part
     // Rows of the stencil: every cell coordinate of axes 1 .. d-1 (an odometer, axis 1 fastest); the
     // cells lo[0] .. hi[0] of a row are contiguous in the sorted arrays.
     CellGrid::Cell row = lo;
+    bool has_late = false;  // a candidate of the second block in the row's cells
     for (;;) {
       std::size_t cell = static_cast<std::size_t>(row[dim - 1]);  // linear index of the row's first cell
       for (int a = dim - 2; a >= 0; --a) cell = cell * static_cast<std::size_t>(n_cells[a]) + static_cast<std::size_t>(row[a]);
       const std::size_t first = grid.cell_start(cell);
       const std::size_t last = grid.cell_start(cell + row_length);
       if (n_pairs + (last - first) > out.index.size()) out.index.resize(2 * (n_pairs + (last - first)) + 1024);
+      if constexpr (two_blocks) has_late |= late_before[last] != late_before[first];
       LocalIndex* dst = out.index.data() + n_pairs;
       // Branch-free append: write always, advance only for a neighbour. The write comes after the distance's
       // loads (written before them, it can stall them: the list and the positions are different arrays, but
@@ -164,7 +175,27 @@ void fill_rows(const std::vector<Vec>& x, const std::size_t n, ParticleOf&& part
       if (a == dim) break;
     }
     out.offset[q + 1] = n_pairs;
-    if (sorted_lists) sort_short_list(out.index.data() + out.offset[q], n_pairs - out.offset[q]);
+    if (!sorted_lists) continue;
+    LocalIndex* a = out.index.data() + out.offset[q];
+    const std::size_t m = n_pairs - out.offset[q];
+    if (two_blocks && has_late) {
+      // A stable partition (the second block's neighbours after the others), then each part sorted.
+      if (m > late.size()) late.resize(2 * m);
+      std::size_t n_first = 0, n_late = 0;
+      for (std::size_t k = 0; k < m; ++k) {
+        const LocalIndex v = a[k];
+        const bool second = static_cast<std::size_t>(v) >= second_block;
+        a[n_first] = v;
+        late[n_late] = v;
+        n_first += !second;
+        n_late += second;
+      }
+      std::copy(late.data(), late.data() + n_late, a + n_first);
+      sort_short_list(a, n_first);
+      sort_short_list(a + n_first, n_late);
+    } else {
+      sort_short_list(a, m);
+    }
   }
 }
 
@@ -182,7 +213,7 @@ void build_neighbour_list(const std::vector<Vec>& x, const Real radius, Neighbou
 void build_neighbour_list_masked(const std::vector<Vec>& x, const Real radius, NeighbourList& out, CellGrid& grid,
                                  const std::size_t n_rows, const std::vector<std::uint8_t>& rows,
                                  const std::vector<std::uint8_t>& candidates, const Real cell_size,
-                                 const bool support_only, const WiderRows* wider) {
+                                 const bool support_only, const WiderRows* wider, const std::size_t second_block) {
   if (n_rows > x.size() || rows.size() < n_rows || candidates.size() < x.size())
     throw std::logic_error("build_neighbour_list_masked: masks shorter than the points");
   if (!(cell_size > 0 && cell_size <= radius))
@@ -195,9 +226,16 @@ void build_neighbour_list_masked(const std::vector<Vec>& x, const Real radius, N
   grid.build(x, cell_size, &candidates);
   const auto particle_of = [](const std::size_t q) { return q; };
   const auto has_row = [&](const std::size_t q) { return rows[q] != 0; };
+  // Rows long enough (a stencil of 5^3 cells or more) that the sort's moves cost more than the partition.
+  int n_stencil = 1;
+  for (int a = 0; a < dim; ++a) n_stencil *= 2 * reach + 1;
+  const bool two_blocks = second_block < x.size() && n_stencil >= 125;
+  const auto search = [](std::size_t, std::size_t&) { return false; };
   if (!support_only) {
-    fill_rows<false>(x, n_rows, particle_of, has_row, [](std::size_t, std::size_t&) { return false; }, radius, reach,
-                     out, grid, true);
+    if (two_blocks)
+      fill_rows<false, true>(x, n_rows, particle_of, has_row, search, radius, reach, out, grid, true, second_block);
+    else
+      fill_rows<false>(x, n_rows, particle_of, has_row, search, radius, reach, out, grid, true);
     return;
   }
   const Real support2 = radius * radius * (1.0 - support_margin);  // in_support's arithmetic
@@ -216,7 +254,10 @@ void build_neighbour_list_masked(const std::vector<Vec>& x, const Real radius, N
     n_pairs = static_cast<std::size_t>(dst - out.index.data());
     return true;
   };
-  fill_rows<true>(x, n_rows, particle_of, has_row, from_wider, radius, reach, out, grid, true);
+  if (two_blocks)
+    fill_rows<true, true>(x, n_rows, particle_of, has_row, from_wider, radius, reach, out, grid, true, second_block);
+  else
+    fill_rows<true>(x, n_rows, particle_of, has_row, from_wider, radius, reach, out, grid, true);
 }
 
 void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, const Real radius,

@@ -8,6 +8,7 @@
 #include "core/types.hpp"
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -106,11 +107,16 @@ struct WiderRows {
 /// the pairs inside the operators' support of `radius` (in_support, core/kernel.hpp; out.support_only set), and
 /// with `wider` (support_only only) the rows that it holds are its rows filtered instead of searched: the same
 /// rows when the wider list's radius covers `radius` plus twice the largest displacement of any point since it
-/// was built, which the caller checks; sorted rows if its rows are.
+/// was built, which the caller checks; sorted rows if its rows are. With `second_block` < x.size(), the points
+/// from that index on are a block of their own (the ghosts after the owned particles, each block in cell order): a
+/// searched row puts its neighbours of that block after the others before it is sorted, so that sorting the
+/// row does not move them one by one past the first block's (with a stencil of at least 125 cells, where the rows
+/// are long; shorter ones are sorted as they are). The same rows as without it.
 void build_neighbour_list_masked(const std::vector<Vec>& x, Real radius, NeighbourList& out, CellGrid& grid,
                                  std::size_t n_rows, const std::vector<std::uint8_t>& rows,
                                  const std::vector<std::uint8_t>& candidates, Real cell_size,
-                                 bool support_only = false, const WiderRows* wider = nullptr);
+                                 bool support_only = false, const WiderRows* wider = nullptr,
+                                 std::size_t second_block = std::numeric_limits<std::size_t>::max());
 /// The neighbours of a few points only: row q of `out` lists every j != rows[q] with |x_j - x_rows[q]| <
 /// radius, in cell order (e.g. the solid surface particles whose fluid load is summed). Cells of side radius.
 void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, Real radius,

@@ -345,7 +345,9 @@ void FluidCore::build_wide_list(const bool row_particles) {
     wide_row[i] = (roles[i] == Role::fluid && nu > 0) || (row_particles && has_row(roles[i]));
   takes_part.resize(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) takes_part[i] = roles[i] != Role::none;
-  build_neighbour_list_masked(p.position, re_l, nl, grid, n, wide_row, takes_part, std::min(cell_size, re_l));
+  // The ghosts come after the owned particles: a row sorts its ghost neighbours apart (the same rows).
+  build_neighbour_list_masked(p.position, re_l, nl, grid, n, wide_row, takes_part, std::min(cell_size, re_l), false,
+                              nullptr, p.n_owned());
 }
 
 void FluidCore::build_near_list(const Real radius, const std::size_t n, const std::optional<Real> predicted_dt) {
@@ -362,7 +364,7 @@ void FluidCore::build_near_list(const Real radius, const std::size_t n, const st
   }
   const WiderRows wider{nl, wide_row};
   build_neighbour_list_masked(p.position, radius, near, near_grid, n, takes_part, takes_part, std::min(cell_size, radius),
-                              true, reuse ? &wider : nullptr);
+                              true, reuse ? &wider : nullptr, p.n_owned());
 }
 
 /// Collision model (MPS-Basic collision()): approaching pairs closer than the collision distance

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 
 using namespace mpsfsi;
@@ -80,8 +81,9 @@ TEST(Neighbours, ListOfSelectedPointsMatchesBruteForce) {
   }
 }
 
-// Rows of some points only, neighbours among some points only, cells of another side than the radius, and the
-// pairs of the operators' support (build_neighbour_list_masked): as brute force, each row in increasing order.
+// Rows of some points only, neighbours among some points only, cells of another side than the radius, the
+// pairs of the operators' support, and the points from an index on gathered as a block of their own
+// (build_neighbour_list_masked): as brute force, each row in increasing order.
 TEST(Neighbours, MaskedListMatchesBruteForce) {
   std::vector<Vec> x = random_points(1500, 11);
   x[6] = x[3];  // coincident: neighbours by distance, outside the support
@@ -93,11 +95,12 @@ TEST(Neighbours, MaskedListMatchesBruteForce) {
   const std::size_t n_rows = 1200;  // the last points are candidates without rows (ghosts)
   std::size_t n_checked = 0;
   for (const Real radius : {0.03, 0.1})
-    for (const Real cell : {radius, radius / 2, radius / 2.7})
-      for (const bool support : {false, true}) {
+    for (const Real cell : {radius, radius / 2, radius / 2.7, radius / 6})  // radius / 6: 13^2 stencil cells
+      for (const bool support : {false, true})
+       for (const std::size_t second_block : {std::numeric_limits<std::size_t>::max(), std::size_t{1000}, std::size_t{0}}) {
         NeighbourList nl;
         CellGrid grid;
-        build_neighbour_list_masked(x, radius, nl, grid, n_rows, rows, candidates, cell, support);
+        build_neighbour_list_masked(x, radius, nl, grid, n_rows, rows, candidates, cell, support, nullptr, second_block);
         ASSERT_EQ(nl.n_particles(), n_rows);
         EXPECT_EQ(nl.support_only, support);
         for (std::size_t i = 0; i < n_rows; ++i) {
@@ -109,7 +112,8 @@ TEST(Neighbours, MaskedListMatchesBruteForce) {
           }
           const std::vector<LocalIndex> got(nl.index.begin() + static_cast<long>(nl.begin(i)),
                                             nl.index.begin() + static_cast<long>(nl.end(i)));
-          ASSERT_EQ(got, ref) << "row " << i << ", radius " << radius << ", cell " << cell << ", support " << support;
+          ASSERT_EQ(got, ref) << "row " << i << ", radius " << radius << ", cell " << cell << ", support " << support
+                              << ", second block from " << second_block;
           n_checked += ref.size();
         }
         const auto row_3 = nl.index.begin() + static_cast<long>(nl.begin(3));
@@ -145,6 +149,12 @@ TEST(Neighbours, RowsFromAWiderListMatchTheSearch) {
   EXPECT_TRUE(std::equal(searched.index.begin(), searched.index.begin() + static_cast<long>(searched.n_pairs()),
                          from_wide.index.begin()));
   EXPECT_GT(searched.n_pairs(), 1000u);
+  // With a second block, rows taken from the wider list and rows searched alike.
+  NeighbourList two_blocks;
+  build_neighbour_list_masked(x, radius, two_blocks, grid, x.size(), all, all, radius / 6, true, &wider, 700);
+  EXPECT_EQ(two_blocks.offset, searched.offset);
+  EXPECT_TRUE(std::equal(searched.index.begin(), searched.index.begin() + static_cast<long>(searched.n_pairs()),
+                         two_blocks.index.begin()));
   // The rows are the wider list's: one emptied there (its entries pointing at itself) comes out empty.
   NeighbourList poisoned = wide;
   const std::size_t r = 1;
