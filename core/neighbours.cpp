@@ -9,6 +9,7 @@
 #include <cassert>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 namespace mpsfsi {
 
@@ -230,12 +231,16 @@ void build_neighbour_list_masked(const std::vector<Vec>& x, const Real radius, N
   int n_stencil = 1;
   for (int a = 0; a < dim; ++a) n_stencil *= 2 * reach + 1;
   const bool two_blocks = second_block < x.size() && n_stencil >= 125;
-  const auto search = [](std::size_t, std::size_t&) { return false; };
-  if (!support_only) {
+  const auto fill = [&](auto support, auto&& take_row) {
+    constexpr bool pairs_in_support = decltype(support)::value;
     if (two_blocks)
-      fill_rows<false, true>(x, n_rows, particle_of, has_row, search, radius, reach, out, grid, true, second_block);
+      fill_rows<pairs_in_support, true>(x, n_rows, particle_of, has_row, take_row, radius, reach, out, grid, true,
+                                        second_block);
     else
-      fill_rows<false>(x, n_rows, particle_of, has_row, search, radius, reach, out, grid, true);
+      fill_rows<pairs_in_support>(x, n_rows, particle_of, has_row, take_row, radius, reach, out, grid, true);
+  };
+  if (!support_only) {
+    fill(std::false_type{}, [](std::size_t, std::size_t&) { return false; });
     return;
   }
   const Real support2 = radius * radius * (1.0 - support_margin);  // in_support's arithmetic
@@ -254,10 +259,7 @@ void build_neighbour_list_masked(const std::vector<Vec>& x, const Real radius, N
     n_pairs = static_cast<std::size_t>(dst - out.index.data());
     return true;
   };
-  if (two_blocks)
-    fill_rows<true, true>(x, n_rows, particle_of, has_row, from_wider, radius, reach, out, grid, true, second_block);
-  else
-    fill_rows<true>(x, n_rows, particle_of, has_row, from_wider, radius, reach, out, grid, true);
+  fill(std::true_type{}, from_wider);
 }
 
 void build_neighbour_list_of(const std::vector<Vec>& x, const std::vector<LocalIndex>& rows, const Real radius,

@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
                     size, preconditioner.c_str(), step + 1, r.iterations, r.residual, size, diff[0] / p_max, size,
                     diff[1], n_owned, ps.size(), ok ? "ok" : "FAILED");
       failures += !ok;
-      if (step == 4 + 1) {  // the step after the partition below: the owned particles are in cell order again
+      if (step == 5) {  // the step after the partition below: the owned particles are in cell order again
         const std::vector<Vec> x(pd.position.begin(), pd.position.begin() + static_cast<std::ptrdiff_t>(pd.n_owned()));
         const std::vector<LocalIndex> order = cell_order(x, dist.cell_size());
         // How far each particle is from its place in cell order, as a fraction of the rank's particles: in
