@@ -93,11 +93,12 @@ TEST(Neighbours, MaskedListMatchesBruteForce) {
     candidates[i] = i % 7 != 2;
   }
   const std::size_t n_rows = 1200;  // the last points are candidates without rows (ghosts)
+  const std::size_t no_block = std::numeric_limits<std::size_t>::max();  // no second block
   std::size_t n_checked = 0;
   for (const Real radius : {0.03, 0.1})
     for (const Real cell : {radius, radius / 2, radius / 2.7, radius / 6})  // radius / 6: 13^2 stencil cells
       for (const bool support : {false, true})
-       for (const std::size_t second_block : {std::numeric_limits<std::size_t>::max(), std::size_t{1000}, std::size_t{0}}) {
+      for (const std::size_t second_block : {no_block, std::size_t{1000}, std::size_t{0}}) {
         NeighbourList nl;
         CellGrid grid;
         build_neighbour_list_masked(x, radius, nl, grid, n_rows, rows, candidates, cell, support, nullptr, second_block);

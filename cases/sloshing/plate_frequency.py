@@ -3,8 +3,8 @@
 cases/sloshing/plate_in_air_*.yaml, cases/3d/sloshing/plate_in_air_high.yaml),
 against Euler-Bernoulli f1 = 1.875^2 / (2 pi L^2) sqrt(E' t^2 / (12 rho)) with E' = E (plane stress) and
 E / (1 - nu^2) (wide plate, cylindrical bending).
-Usage: plate_frequency.py probes.csv --length L [--thickness 0.004] [--E 6e6] [--nu 0.49] [--rho 1100] [--column tip_dy]
-                          [--max-error PCT --against plane_stress|wide_plate]   (exit 1 when exceeded)"""
+Usage: plate_frequency.py probes.csv --length L [--thickness 0.004] [--E 6e6] [--nu 0.49] [--rho 1100]
+                          [--column tip_dy] [--max-error PCT --against plane_stress|wide_plate]   (exit 1 when exceeded)"""
 import argparse
 import csv
 import math
