@@ -72,8 +72,9 @@ RoundCount count_round(const CaseSpec& spec, const RoundShape& s) {
              : count_cylinder(s.centre, s.axis, s.radius, spec.dp, n_dummy_layers, lattice_origin(spec));
 }
 
-/// The lattice points of a body: its shape filled, less the points inside the walls it names in `subtract` or
-/// closer than dp/2 to their surfaces (so that no body particle comes closer than dp/2 to a wall's).
+/// The lattice points of a body: its shape filled, less the points of the walls it names in `subtract` and the
+/// points inside them. Walls and bodies share the lattice, so every point next to a wall's surface is either the
+/// wall's or the body's: a face off the lattice (a slope, a curve) leaves no empty points between them.
 std::vector<Vec> body_points(const CaseSpec& spec, const BodySpec& b) {
   const Rect rect = b.surface || b.round ? b.rect : on_lattice(spec, b.rect);
   std::vector<Vec> points =
@@ -85,11 +86,19 @@ std::vector<Vec> body_points(const CaseSpec& spec, const BodySpec& b) {
   for (const std::string& name : b.subtract) {
     const auto w = std::find_if(spec.walls.begin(), spec.walls.end(), [&](const WallSpec& x) { return x.name == name; });
     if (w == spec.walls.end()) throw CaseError(fmt::format("{}: body '{}': no wall '{}' to subtract", spec.file, b.name, name));
-    const SignedDistance distance = wall_distance(*w);
-    const Real clearance = 0.5 * spec.dp * (1 - 1e-10);
+    // A block's walls stand on its rectangle on the lattice; a sphere's and a cylinder's take the points on
+    // their surface, a surface's leave them to the fluid's side (core/geometry.hpp).
+    const bool block = w->type == WallType::box || w->type == WallType::block;
+    const Rect on_grid = on_lattice(spec, w->rect);
+    const SignedDistance distance = block ? box_distance(on_grid.lo, on_grid.hi) : wall_distance(*w);
+    const Real on_surface = surface_tolerance * spec.dp;
+    const bool takes_surface = w->type == WallType::sphere || w->type == WallType::cylinder;
     Vec nearest;
     points.erase(std::remove_if(points.begin(), points.end(),
-                                [&](const Vec& x) { return distance(x, nearest) < clearance; }),
+                                [&](const Vec& x) {
+                                  const Real d = distance(x, nearest);
+                                  return takes_surface ? d <= on_surface : d < -on_surface;
+                                }),
                  points.end());
   }
   return points;

@@ -1,7 +1,7 @@
 // Bodies and walls given by closed surfaces (io/surface.hpp; in 2D polygons, in 3D STL and OBJ files): a box given
 // as a surface gives the built-in rectangle's, box tank's and block's particles; a tessellated cylinder the built-in
-// cylinder's; a body with an obstacle subtracted keeps dp/2 from it; bad surfaces are refused with the key, the value
-// and what is wrong.
+// cylinder's; a body with an obstacle subtracted fills every lattice point outside it, up to the obstacle's wall
+// points; bad surfaces are refused with the key, the value and what is wrong.
 #include "core/geometry.hpp"
 #include "io/case.hpp"
 #include "io/scene.hpp"
@@ -16,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,36 @@ void expect_counts_of(const CaseSpec& spec, const Scene& scene) {
   EXPECT_EQ(n.dummy, p.n_of_kind(ParticleKind::dummy));
 }
 
+/// Every lattice point of `rect` (a body's rectangle on the case's lattice, origin at its corner) next to an
+/// obstacle subtracted from the body holds one particle: the body's where `distance` (the obstacle's, positive
+/// outside) is above `on_surface`, the obstacle's wall or dummy particle where the point lies less than the wall and
+/// dummy layers (3 dp) deep, closer to the surface than on_surface either (`surface_points_are_walls`); so the body
+/// leaves no empty points along the obstacle's surface, whether the surface lies on the lattice or not.
+void expect_no_gap_at(const Scene& scene, const Rect& rect, const Real dp, const SignedDistance& distance,
+                      const bool surface_points_are_walls) {
+  const auto key = [&](const Vec& x) {
+    std::array<long long, dim> k{};
+    for (int a = 0; a < dim; ++a) k[a] = std::llround((x[a] - rect.lo[a]) / dp - 0.5);
+    return k;
+  };
+  std::map<std::array<long long, dim>, std::vector<ParticleKind>> at;
+  const auto& p = scene.particles;
+  for (std::size_t i = 0; i < p.size(); ++i) at[key(p.position[i])].push_back(p.kind[i]);
+  const Real on_surface = surface_tolerance * dp;
+  std::size_t n_near = 0;
+  Vec nearest;
+  for (const Vec& x : fill_rectangle(rect.lo, rect.hi, dp)) {
+    const Real d = distance(x, nearest);
+    if (d <= -3 * dp || d > 3 * dp) continue;  // deep inside the obstacle, or far from it
+    ++n_near;
+    const auto it = at.find(key(x));
+    ASSERT_TRUE(it != at.end() && it->second.size() == 1) << "no particle, or more than one, at " << x.transpose();
+    const bool wall_side = surface_points_are_walls ? d <= on_surface : d < -on_surface;
+    EXPECT_EQ(it->second[0] == ParticleKind::fluid, !wall_side) << x.transpose() << " at distance " << d;
+  }
+  EXPECT_GT(n_near, 0u);
+}
+
 }  // namespace
 
 #if MPSFSI_DIM == 2
@@ -106,6 +137,7 @@ bodies:
 walls:
   - {name: tank, type: box, rectangle: {min: [0, 0], max: [1, 0.8]}}
 )";
+
 
 }  // namespace
 
@@ -173,34 +205,45 @@ TEST(Surface, ConcavePolygonTankHasThreeLayersEverywhere) {
   EXPECT_EQ(n_wall, 360u + 5u - 1u);
 }
 
-// A body with an obstacle subtracted: the water fills the tank around a disc; no water particle is inside the disc
-// or closer than dp/2 to its surface, and the scene has no overlap (build_scene checks it).
+// A body with obstacles subtracted: the water fills the tank around a disc and a ramp (a polygon whose slope lies
+// off the lattice). No water particle is inside either, and every lattice point next to their surfaces is the
+// water's or the obstacle's: the body leaves no empty points along a face off the lattice. The scene has no overlap
+// (build_scene checks it).
 TEST(Surface, SubtractCutsAnObstacleOutOfABody) {
   const std::string text =
       replaced(tank_case, "rectangle: {min: [0, 0], max: [0.3, 0.4]}}",
-               "rectangle: {min: [0, 0], max: [0.3, 0.4]}, subtract: [pile]}") +
-      "  - {name: pile, type: sphere, sphere: {centre: [0.15, 0.2], radius: 0.0537}}\n";
+               "rectangle: {min: [0, 0], max: [0.3, 0.4]}, subtract: [pile, ramp]}") +
+      "  - {name: pile, type: sphere, sphere: {centre: [0.15, 0.2], radius: 0.0537}}\n"
+      "  - {name: ramp, type: polygon, polygon: {points: [[0.05, 0.03], [0.25, 0.03], [0.25, 0.1]]}}\n";
   const CaseSpec spec = parse_case(text, "cases/x.yaml");
-  ASSERT_EQ(spec.bodies[0].subtract, std::vector<std::string>{"pile"});
+  ASSERT_EQ(spec.bodies[0].subtract, (std::vector<std::string>{"pile", "ramp"}));
   const Scene scene = build_scene(spec);
   expect_counts_of(spec, scene);
   const auto& p = scene.particles;
+  const SignedDistance pile = sphere_distance(Vec(0.15, 0.2), 0.0537);
+  const SignedDistance ramp = ClosedSurface::distance_function(spec.walls[2].surface);
   std::size_t n_fluid = 0;
+  Vec nearest;
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (p.kind[i] != ParticleKind::fluid) continue;
     ++n_fluid;
-    EXPECT_GE((p.position[i] - Vec(0.15, 0.2)).norm() - 0.0537, 0.5 * spec.dp * (1 - 1e-9));
+    EXPECT_GT(pile(p.position[i], nearest), 0.0);
+    EXPECT_GE(ramp(p.position[i], nearest), 0.0);
   }
+  const Rect body{Vec(0, 0), Vec(0.3, 0.4)};
   std::size_t n_cut = 0;
-  for (const Vec& x : fill_rectangle(Vec(0, 0), Vec(0.3, 0.4), spec.dp)) n_cut += (x - Vec(0.15, 0.2)).norm() < 0.0537 + 0.005;
+  for (const Vec& x : fill_rectangle(body.lo, body.hi, spec.dp))
+    n_cut += pile(x, nearest) <= surface_tolerance * spec.dp || ramp(x, nearest) < -surface_tolerance * spec.dp;
   EXPECT_EQ(n_fluid, 30 * 40 - n_cut);
   EXPECT_GT(n_cut, 0u);
-  // Without subtract the body overlaps the pile.
-  const std::string overlapping = replaced(text, ", subtract: [pile]", "");
+  expect_no_gap_at(scene, body, spec.dp, pile, true);
+  expect_no_gap_at(scene, body, spec.dp, ramp, false);
+  // Without the pile in subtract the body overlaps it.
+  const std::string overlapping = replaced(text, "subtract: [pile, ramp]", "subtract: [ramp]");
   EXPECT_THAT(error_of(overlapping), HasSubstr("bodies must not overlap walls (or list the wall in the body's subtract)"));
-  EXPECT_THAT(error_of(replaced(text, "subtract: [pile]", "subtract: [rock]")),
+  EXPECT_THAT(error_of(replaced(text, "subtract: [pile, ramp]", "subtract: [rock]")),
               HasSubstr("bodies[0].subtract: 'rock' is not a wall of the case; expected names of walls"));
-  EXPECT_THAT(error_of(replaced(text, "subtract: [pile]", "subtract: [tank]")),
+  EXPECT_THAT(error_of(replaced(text, "subtract: [pile, ramp]", "subtract: [tank]")),
               HasSubstr("'tank' is a tank (the fluid is inside it); expected obstacles"));
 }
 
@@ -389,7 +432,8 @@ TEST(Surface, StlCylinderIsTheBuiltInCylinder) {
   }
 }
 
-// Water around a cylinder given as a surface: the body lists the pile in `subtract`.
+// Water around a cylinder given as a surface: the body lists the pile in `subtract`; it leaves no empty points
+// between the water and the pile.
 TEST(Surface, SubtractCutsAnStlObstacleOutOfABody) {
   write_file("pile.stl", stl_text(cylinder_triangles(0.25, 0.1, 0.05, 0, 0.2, 64)));
   const std::string text = replaced(tank_case, "rectangle: {min: [0, 0, 0], max: [0.1, 0.2, 0.3]}",
@@ -401,10 +445,13 @@ TEST(Surface, SubtractCutsAnStlObstacleOutOfABody) {
   Vec nearest;
   for (std::size_t i = 0; i < scene.particles.size(); ++i) {
     if (scene.particles.kind[i] == ParticleKind::fluid) {
-      EXPECT_GE(spec.walls[1].surface->signed_distance(scene.particles.position[i], nearest), 0.5 * spec.dp * (1 - 1e-9));
+      EXPECT_GE(spec.walls[1].surface->signed_distance(scene.particles.position[i], nearest), 0.0);
     }
   }
   EXPECT_LT(scene.particles.n_of_kind(ParticleKind::fluid), 50u * 20u * 10u);
+  // Every lattice point along the pile's curved surface is the water's or the pile's.
+  expect_no_gap_at(scene, Rect{Vec(0, 0, 0), Vec(0.5, 0.2, 0.1)}, spec.dp,
+                   ClosedSurface::distance_function(spec.walls[1].surface), false);
 }
 
 // Bad surfaces: not closed, inside out, inconsistently oriented, empty, unreadable, missing, of another format, far
