@@ -8,15 +8,18 @@
 # beyond the 1-rank count is the parallel overhead that no machine removes (ghosts, the block preconditioner's
 # extra iterations, the exchanges); the count does not see the memory's speed. Results go to docs/performance.md
 # ("Parallel runs").
-# Usage: bench/scaling_instructions.sh [BUILD_DIR [DP [N1 N2]]]
+# Usage: bench/scaling_instructions.sh [BUILD_DIR [DP [N1 N2 [OVERRIDE...]]]] (the overrides go to the benchmark,
+# e.g. the 3D box of docs/performance.md with BUILD_DIR build/3d)
 set -euo pipefail
 build=${1:-build}
 dp=${2:-0.00065}
 n1=${3:-2}
 n2=${4:-4}
+shift $(( $# < 4 ? $# : 4 ))
 command -v valgrind > /dev/null || { echo "scaling_instructions.sh: valgrind is not installed" >&2; exit 2; }
-bench="$build/bench/fluid/bench_fluid_dam_break"
 cmake --build "$build" --target bench_fluid_dam_break >/dev/null  # not in the default build
+bench="$build/bench/fluid/bench_fluid_dam_break"
+[ -x "$bench" ] || bench="$build/bench/bench_fluid_dam_break"  # the 3D build's place
 mpi="mpirun --allow-run-as-root --oversubscribe -np"
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
@@ -31,7 +34,7 @@ for np in 1 2; do
   for n in "$n1" "$n2"; do
     $mpi "$np" valgrind --tool=callgrind --toggle-collect='mpsfsi::FluidSolver::advance(double, double)' \
       --callgrind-out-file="$dir/cg.$np.$n.%q{OMPI_COMM_WORLD_RANK}" \
-      "$bench" ssor "$n" "$dp" > "$dir/log.$np.$n" 2>&1
+      "$bench" ssor "$n" "$dp" "$@" > "$dir/log.$np.$n" 2>&1
   done
 done
 per_step() { awk -v a="$1" -v b="$2" -v d="$((n2 - n1))" 'BEGIN {printf "%.1f", (b - a) / d / 1e6}'; }
