@@ -350,9 +350,15 @@ void FluidCore::build_wide_list(const bool row_particles) {
                               nullptr, p.n_owned());
 }
 
-void FluidCore::build_near_list(const Real radius, const std::size_t n, const std::optional<Real> predicted_dt) {
+void FluidCore::build_near_list(const Real radius, const std::function<bool(Role)>& ghost_needs_row,
+                                const std::optional<Real> predicted_dt) {
   takes_part.resize(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) takes_part[i] = roles[i] != Role::none;
+  near_row.resize(p.size());
+  bool any_ghost_row = false;
+  for (const Role r : {Role::fluid, Role::boundary, Role::dummy}) any_ghost_row = any_ghost_row || ghost_needs_row(r);
+  const std::size_t n = any_ghost_row ? p.size() : p.n_owned();
+  for (std::size_t i = 0; i < n; ++i) near_row[i] = takes_part[i] && (i < p.n_owned() || ghost_needs_row(roles[i]));
   // The wide list's rows (fluid particles) hold their near rows when the wide radius covers the near one plus
   // both particles' moves since it was built: predict moved the fluid particles (owned and ghosts) by dt v.
   bool reuse = false;
@@ -363,7 +369,7 @@ void FluidCore::build_near_list(const Real radius, const std::size_t n, const st
     reuse = re_l > radius + 2.0 * 1.01 * *predicted_dt * std::sqrt(v2_max);
   }
   const WiderRows wider{nl, wide_row};
-  build_neighbour_list_masked(p.position, radius, near, near_grid, n, takes_part, takes_part, std::min(cell_size, radius),
+  build_neighbour_list_masked(p.position, radius, near, near_grid, n, near_row, takes_part, std::min(cell_size, radius),
                               true, reuse ? &wider : nullptr, p.n_owned());
 }
 
@@ -458,9 +464,10 @@ void FluidCore::number_rows(const Real dt) {
 }
 
 /// Refreshes these fields at the ghosts from their owners.
-void FluidCore::refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report) {
+void FluidCore::refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report,
+                               const std::optional<ParticleKind> only) {
   const auto t0 = Clock::now();
-  dist.exchange_ghosts(p, fields);
+  dist.exchange_ghosts(p, fields, only);
   report.t_halo += seconds_since(t0);
 }
 

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -94,10 +95,10 @@ struct FluidCore {
   /// with a pressure row (a Laplacian of re_laplacian in the rows); the other rows are empty.
   void build_wide_list(bool row_particles);
   /// The near list: the pairs within `radius` (in_support) at the current positions of the particles that take
-  /// part, rows of the first n particles (the others' rows empty), each row in increasing index order. With
-  /// predicted_dt (the step's predict moved the fluid since build_wide_list), the wide list's rows are filtered
-  /// where they cover the near ones.
-  void build_near_list(Real radius, std::size_t n, std::optional<Real> predicted_dt);
+  /// part, rows of the owned particles and of the ghosts whose role `ghost_needs_row` names (the others' rows
+  /// empty), each row in increasing index order. With predicted_dt (the step's predict moved the fluid since
+  /// build_wide_list), the wide list's rows are filtered where they cover the near ones.
+  void build_near_list(Real radius, const std::function<bool(Role)>& ghost_needs_row, std::optional<Real> predicted_dt);
   /// Collision model (MPS-Basic collision()).
   void collide(Real dt);
   /// Eq. 8 at the predicted positions: n*, and the free-surface double check; `keep_surface`: a particle
@@ -111,7 +112,8 @@ struct FluidCore {
   template <class SurfaceValue>
   PressureSolveResult solve_pressure(const SurfaceValue& surface_value);
   /// Refreshes these fields at the ghosts from their owners.
-  void refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report);
+  void refresh_ghosts(const std::vector<std::string>& fields, FluidStepReport& report,
+                      std::optional<ParticleKind> only = std::nullopt);
   /// Walls hold water: a fluid particle that ends the step inside the lattice cell of a wall or dummy particle,
   /// or in a gap between those cells and a face off the lattice, goes back onto that wall's wetted surface (the
   /// particle's wall_surface_field offset), and its velocity
@@ -167,7 +169,7 @@ struct FluidCore {
   std::vector<Role> roles;
   NeighbourList nl, near;
   CellGrid grid, near_grid;
-  std::vector<std::uint8_t> wide_row, takes_part;  ///< the masks of the lists' rows and candidates
+  std::vector<std::uint8_t> wide_row, near_row, takes_part;  ///< the masks of the lists' rows and candidates
   std::vector<Real> n_star;
   std::vector<Vec> v_new, dv;
   std::vector<LocalIndex> row_of;  ///< local column id of each particle's pressure unknown, -1 if none

@@ -157,7 +157,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   t0 = Clock::now();
   m.classify();
   m.gravity = m.gravity_full * ramp_factor(t + 0.5 * dt, m.gravity_ramp);
-  const std::size_t n_near_rows = m.scheme->ghosts_need_neighbours() ? m.p.size() : m.p.n_owned();
+  const auto ghost_needs_row = [&m](const fluid_detail::Role role) { return m.scheme->ghost_needs_row(role); };
   const bool initial = m.n_steps == 0;
   if (initial) {
     // The initial state with the walls where the run starts them (where the case placed them, around the water
@@ -165,7 +165,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
     // angle is not 0) is that step's motion, not part of the state the fluid starts at rest in.
     report.t_rest += seconds_since(t0);
     t0 = Clock::now();
-    m.build_near_list(m.scheme->near_radius(), n_near_rows, std::nullopt);
+    m.build_near_list(m.scheme->near_radius(), ghost_needs_row, std::nullopt);
     report.t_neighbours += seconds_since(t0);
     t0 = Clock::now();
     m.scheme->initial_state(report);
@@ -183,7 +183,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   report.t_rest += seconds_since(t0);
   m.refresh_ghosts({"position", "velocity"}, report);
   t0 = Clock::now();
-  m.build_near_list(m.scheme->near_radius(), n_near_rows, dt);
+  m.build_near_list(m.scheme->near_radius(), ghost_needs_row, dt);
   report.t_neighbours += seconds_since(t0);
   t0 = Clock::now();
   m.collide(dt);
@@ -196,7 +196,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   m.refresh_ghosts({fluid_fields::free_surface}, report);
 
   t0 = Clock::now();
-  m.scheme->prepare(dt);
+  m.scheme->prepare(dt, report);
   m.number_rows(dt);
   m.scheme->assemble(dt);
   report.t_assembly += seconds_since(t0);
@@ -221,7 +221,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   // The projection's active set: re-solved while rows change (at most max_solves solves), on the same rows.
   for (int solves = 1; solves < m.scheme->max_solves(); ++solves) {
     m.refresh_ghosts({fluid_fields::pressure}, report);
-    if (!m.scheme->update_rows(solves, dt)) break;
+    if (!m.scheme->update_rows(solves, dt, report)) break;
     m.refresh_ghosts({fluid_fields::free_surface}, report);
     t0 = Clock::now();
     m.scheme->assemble(dt);

@@ -18,8 +18,9 @@ class PressureScheme {
 
   /// The radius of the near list (the pairs the rows and the correction use) [m].
   virtual Real near_radius() const = 0;
-  /// Whether the ghosts need their neighbours too (the projection's rows reach two kernel radii).
-  virtual bool ghosts_need_neighbours() const = 0;
+  /// Whether the ghosts of this role need their near rows in the coming step (an owned row or correction reads
+  /// their pairs); the owned particles always have theirs.
+  virtual bool ghost_needs_row(Role role) const = 0;
   /// Whether every particle with a pressure row needs its pairs within re_laplacian (FluidCore::build_wide_list).
   virtual bool rows_need_wide_list() const = 0;
   /// How far from the fluid a wall or dummy particle can be and still change a row that is read, its own or
@@ -33,7 +34,7 @@ class PressureScheme {
   /// After the free-surface check, before its flags are refreshed at the ghosts.
   virtual void after_surface() {}
   /// After the flags are current at the ghosts, before the first assembly.
-  virtual void prepare(Real /*dt*/) {}
+  virtual void prepare(Real /*dt*/, FluidStepReport&) {}
   /// The rows of FluidCore::sys and their right-hand side, after FluidCore::number_rows; called again after
   /// update_rows changed rows (the same rows, numbered once per step).
   virtual void assemble(Real dt) = 0;
@@ -42,7 +43,7 @@ class PressureScheme {
   /// Pressure solves of one step at most (an active set re-solves while its rows change).
   virtual int max_solves() const { return 1; }
   /// Updates the rows after a solve (the ghosts' pressures current); whether any changed on any rank.
-  virtual bool update_rows(int /*solves*/, Real /*dt*/) { return false; }
+  virtual bool update_rows(int /*solves*/, Real /*dt*/, FluidStepReport&) { return false; }
   /// After the last solve, the pressures current at the ghosts.
   virtual void after_solve(Real /*dt*/) {}
   /// The pressure's correction of the fluid particles' velocities and positions.

@@ -36,7 +36,6 @@ struct Geometry {
   Real projection_scale = 0;           ///< d / C of the projection
   std::vector<LocalIndex> parent_of;   ///< the wall particle whose group a dummy joins, or -1
   std::vector<Real> group_error;       ///< a group dummy's density minus its reference
-  std::vector<Real> surface_pressure;  ///< the pressure of each particle as a free-surface row
 };
 
 class ProjectionScheme final : public PressureScheme {
@@ -56,11 +55,19 @@ class ProjectionScheme final : public PressureScheme {
     p.add_scalar_field(reference_density_field, 0.0);
     p.add_scalar_field(rest_offset_field, 0.0);
     p.add_scalar_field(rest_rate_field, 0.0);
+    p.add_scalar_field(surface_pressure_field, 0.0);
+    p.add_vector_field(trial_dv_field);
   }
 
   Real near_radius() const override { return std::max(re_g, re_p); }  // the kernel may reach further than re_g
-  // The ghosts' rows too: their dn/dx enter the pressure rows of their neighbours.
-  bool ghosts_need_neighbours() const override { return true; }
+  /// Every ghost's row in the first step and with G in the rows (stabilisation < 1): G couples a row with its
+  /// neighbours' neighbours. Otherwise the dummies' alone: a dummy's row names its wall group (the column its
+  /// pressure takes in the rows and corrections that reach it) and holds its density (a member's part of its
+  /// group's row). A fluid ghost's trial correction and surface pressure come from its owner
+  /// (update_active_set, prepare); a wall or solid ghost is a column, whose pairs no owned row reads.
+  bool ghost_needs_row(const Role role) const override {
+    return initial_step() || stabilisation < 1 || role == Role::dummy;
+  }
   bool rows_need_wide_list() const override { return false; }
   /// The longest chain of pairs from a fluid particle to a particle whose row is read: a wet wall (near
   /// radius), its group's dummies (re_g), their neighbours (near radius: their densities, and the columns of the
@@ -92,11 +99,13 @@ class ProjectionScheme final : public PressureScheme {
     }
   }
 
-  void prepare(Real) override {
+  void prepare(Real, FluidStepReport& report) override {
     step_alpha = initial_step() ? start_alpha : stabilisation;
     linear_source = initial_step();
     // The first solve on the positions before the step moved them.
     projection_geometry(linear_source ? start_position : p.position);
+    core.refresh_ghosts({surface_pressure_field}, report, ParticleKind::fluid);
+    surface_pressure = &p.scalar_field(surface_pressure_field);
     rows_ready = false;
   }
 
@@ -105,12 +114,14 @@ class ProjectionScheme final : public PressureScheme {
   /// The pressure a free-surface row holds: 0, or with the projection the hydrostatic pressure at a fluid
   /// particle's centre, half a spacing below the surface, rho dp / 2 max(0, -g . n) with n the outward normal
   /// -dn_k/dx_k / |dn_k/dx_k| (rho g dp / 2 on a level surface, 0 on a vertical one).
-  Real surface_value(const std::size_t i) const override { return geo.surface_pressure[i]; }
+  Real surface_value(const std::size_t i) const override { return (*surface_pressure)[i]; }
 
   int max_solves() const override { return max_active_set_solves; }
 
   // Rows come back in the first two updates only.
-  bool update_rows(const int solves, const Real dt) override { return update_active_set(solves <= 2, dt); }
+  bool update_rows(const int solves, const Real dt, FluidStepReport& report) override {
+    return update_active_set(solves <= 2, dt, report);
+  }
 
   void after_solve(const Real dt) override {
     if (initial_step()) start_from_rest(dt);
@@ -128,6 +139,10 @@ class ProjectionScheme final : public PressureScheme {
   /// rest_rate_field [1/s^2].
   static constexpr const char* rest_offset_field = "rest_offset";
   static constexpr const char* rest_rate_field = "rest_rate";
+  /// The projection: each fluid particle's pressure as a free-surface row (surface_pressures), and the
+  /// correction's velocity change at the current pressures (update_active_set), from their owners at the ghosts.
+  static constexpr const char* surface_pressure_field = "_projection_surface_pressure";
+  static constexpr const char* trial_dv_field = "_projection_trial_dv";
 
   /// The projection, first step, at the initial positions: the reference densities (reference_density_field),
   /// and each row's density error before the step moves anything (initial_error, by the rows' definition of
@@ -245,7 +260,7 @@ class ProjectionScheme final : public PressureScheme {
     const Real c_sum = sums[1] > 0 ? sums[0] / sums[1] : c_lattice;
     geo.projection_scale = dim / c_sum;
     wall_groups(x);
-    surface_pressures();
+    if (for_correction) surface_pressures();
   }
 
   /// The wall groups: each dummy particle within re_g of a wall particle joins the group of the nearest one
@@ -575,7 +590,7 @@ class ProjectionScheme final : public PressureScheme {
 
   /// The free-surface pressure of column q's particle.
   Real surface_pressure_of_column(const std::size_t q) const {
-    return geo.surface_pressure[static_cast<std::size_t>(column_particle[q])];
+    return (*surface_pressure)[static_cast<std::size_t>(column_particle[q])];
   }
 
   /// The complementarity of the density constraint, p >= 0, w = A p - b >= 0, p w = 0 (a primal-dual active
@@ -589,11 +604,15 @@ class ProjectionScheme final : public PressureScheme {
   /// as a flux into a free-surface particle that the force in fact pushes out (a flux that grows as
   /// p dt^2 / (rho dp^2) against the particle's density shortfall). A wall or solid row keeps the test w < 0.
   /// The pressures of the ghosts must be current. Whether any row changed on any rank.
-  bool update_active_set(const bool additions, const Real dt) {
+  bool update_active_set(const bool additions, const Real dt, FluidStepReport& report) {
     auto& surface = p.scalar_field(fluid_fields::free_surface);
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
     const Real w_tolerance = 1e-9 * projection_source * n0_kernel;  // a relative density change of 1e-9
-    if (additions) correction_velocities(dt, near.n_particles(), trial_dv);
+    auto& trial_dv = p.vector_field(trial_dv_field);
+    if (additions) {
+      correction_velocities(dt, p.n_owned(), trial_dv);
+      core.refresh_ghosts({trial_dv_field}, report, ParticleKind::fluid);
+    }
     int changed = 0;
     for (std::size_t r = 0; r < particle_of_row.size(); ++r) {
       const auto i = static_cast<std::size_t>(particle_of_row[r]);
@@ -676,6 +695,7 @@ class ProjectionScheme final : public PressureScheme {
   /// (stiffness_number in fluid/fluid_solver.hpp).
   void correct_projection(const Real dt) {
     const std::size_t n = p.n_owned();
+    dv.resize(n);
     correction_velocities(dt, n, dv);
     for (std::size_t k = 0; k < n; ++k) {
       if (roles[k] != Role::fluid) continue;
@@ -684,15 +704,15 @@ class ProjectionScheme final : public PressureScheme {
     }
   }
 
-  /// The correction's velocity change dv_k of correct_projection for the particles [0, n) of the near list
-  /// (0 for the ones that are not fluid), with the pressures as they are.
+  /// The correction's velocity change dv_k of correct_projection for the particles [0, n) (0 for the ones that
+  /// are not fluid) into out[0, n), with the pressures as they are.
   void correction_velocities(const Real dt, const std::size_t n, std::vector<Vec>& out) const {
+    assert(out.size() >= n);
     const auto& pressure = p.scalar_field(fluid_fields::pressure);
     // The start from rest (the first step) carries its whole pressure: its force is the transpose of its
     // rows, so that p0 holds the water (at fine spacings p0 is far above p_cap at the first step's dt).
     const Real p_cap = initial_step() ? std::numeric_limits<Real>::infinity()
                                       : stiffness_number * rho * dp * dp / (dt * dt);
-    out.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
       out[k].setZero();
       if (roles[k] != Role::fluid) continue;
@@ -707,16 +727,17 @@ class ProjectionScheme final : public PressureScheme {
     }
   }
 
-  /// The projection: surface_value of every particle in the near list (owned and ghosts). A particle whose
+  /// The projection: surface_value of every owned particle (surface_pressure_field). A particle whose
   /// neighbours balance (|dn_k/dx_k| at round-off, inside a regular arrangement) has no normal: 0.
   void surface_pressures() {
-    const std::size_t n = near.n_particles();
-    geo.surface_pressure.assign(n, 0.0);
+    const std::size_t n = p.n_owned();
+    auto& value = p.scalar_field(surface_pressure_field);
+    std::fill(value.begin(), value.begin() + static_cast<std::ptrdiff_t>(n), 0.0);
     const Real no_normal = 1e-9 * n0_kernel / dp;
     for (std::size_t k = 0; k < n; ++k) {
       const Real norm = geo.dn_self[k].norm();
       if (roles[k] != Role::fluid || !(norm > no_normal)) continue;
-      geo.surface_pressure[k] = 0.5 * rho * dp * std::max(0.0, gravity.dot(geo.dn_self[k]) / norm);
+      value[k] = 0.5 * rho * dp * std::max(0.0, gravity.dot(geo.dn_self[k]) / norm);
     }
   }
 
@@ -758,9 +779,9 @@ class ProjectionScheme final : public PressureScheme {
   Real c_lattice = 0;             ///< its sum_j -w'(r_j) r_j on the lattice (C when no particle is interior)
   Real projection_source = 0;     ///< kappa rho / (dt^2 n0) of the step's rows (assemble_projection)
   Real row_compress = 0;          ///< the compressibility 1 / (c^2 dt^2) of the step's rows (assemble_projection)
-  std::vector<Vec> trial_dv;      ///< the correction's velocity change at the current pressures (update_active_set)
 
   Geometry geo;                          ///< projection: the geometry of this step's rows and correction
+  const std::vector<Real>* surface_pressure = nullptr;  ///< surface_pressure_field, current at the ghosts (prepare)
   std::vector<Real> initial_error;       ///< projection, first step: each row's density error at the start
   std::vector<std::uint8_t> dry;         ///< projection: a wall or solid row without a fluid neighbour
   std::vector<std::size_t> member_ptr;   ///< projection: each row's group dummies (CSR)

@@ -22,7 +22,7 @@ class StandardScheme final : public PressureScheme {
         corrected(fluid.gradient == PressureGradient::corrected) {}
 
   Real near_radius() const override { return re_g; }
-  bool ghosts_need_neighbours() const override { return false; }
+  bool ghost_needs_row(Role) const override { return false; }
   bool rows_need_wide_list() const override { return true; }  // eq. 23's Laplacian at re_laplacian
 
   /// Eq. 23 assembled for this rank's rows (its owned particles with a pressure unknown): -lap P + P / (c^2
