@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -19,15 +20,16 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size, const std:
   const std::size_t n = x.size();
   assert(!include || include->size() >= n);
   const auto binned = [&](const std::size_t i) { return !include || (*include)[i] != 0; };
-  Vec lo = Vec::Constant(0), hi = Vec::Constant(0);
-  if (n > 0) {
-    lo = hi = x[0];
-    for (const auto& p : x) {
-      if (!p.allFinite()) throw std::runtime_error("CellGrid: a particle position is not finite");
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
+  // The grid spans the binned points alone (the others' cells are clamped to it, cell_of): points left out far
+  // from the ones binned (walls far from the water) neither widen it nor fill it with empty cells.
+  Vec lo = Vec::Constant(std::numeric_limits<Real>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!x[i].allFinite()) throw std::runtime_error("CellGrid: a particle position is not finite");
+    if (!binned(i)) continue;
+    lo = lo.cwiseMin(x[i]);
+    hi = hi.cwiseMax(x[i]);
   }
+  if (!(lo.array() <= hi.array()).all()) lo = hi = n > 0 ? x[0] : Vec::Zero();  // nothing binned: one cell
   if (!lo.allFinite() || !hi.allFinite())
     throw std::runtime_error("CellGrid: a particle position is not finite");
   origin_ = lo;
@@ -63,8 +65,9 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size, const std:
 CellGrid::Cell CellGrid::cell_of(const Vec& x) const {
   Cell c;
   for (int a = 0; a < dim; ++a) {
-    const int k = static_cast<int>((x[a] - origin_[a]) / cell_size_);
-    c[a] = std::clamp(k, 0, n_cells_[a] - 1);
+    // Clamped before the conversion: a point far outside the grid (not binned) has no representable cell.
+    const Real k = std::clamp((x[a] - origin_[a]) / cell_size_, Real(0), Real(n_cells_[a] - 1));
+    c[a] = static_cast<int>(k);
   }
   return c;
 }
