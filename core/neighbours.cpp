@@ -30,8 +30,6 @@ void CellGrid::build(const std::vector<Vec>& x, const Real cell_size, const std:
     hi = hi.cwiseMax(x[i]);
   }
   if (!(lo.array() <= hi.array()).all()) lo = hi = n > 0 ? x[0] : Vec::Zero();  // nothing binned: one cell
-  if (!lo.allFinite() || !hi.allFinite())
-    throw std::runtime_error("CellGrid: a particle position is not finite");
   origin_ = lo;
   std::size_t n_total = 1;
   for (int a = 0; a < dim; ++a) {

@@ -354,11 +354,14 @@ void FluidCore::build_near_list(const Real radius, const std::function<bool(Role
                                 const std::optional<Real> predicted_dt) {
   takes_part.resize(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) takes_part[i] = roles[i] != Role::none;
-  near_row.resize(p.size());
-  bool any_ghost_row = false;
-  for (const Role r : {Role::fluid, Role::boundary, Role::dummy}) any_ghost_row = any_ghost_row || ghost_needs_row(r);
-  const std::size_t n = any_ghost_row ? p.size() : p.n_owned();
-  for (std::size_t i = 0; i < n; ++i) near_row[i] = takes_part[i] && (i < p.n_owned() || ghost_needs_row(roles[i]));
+  // The scheme's answer once per role (indexed by Role; none takes no part).
+  static_assert(static_cast<int>(Role::dummy) == 2 && static_cast<int>(Role::none) == 3);
+  const bool ghost_row[] = {ghost_needs_row(Role::fluid), ghost_needs_row(Role::boundary), ghost_needs_row(Role::dummy),
+                            false};
+  const std::size_t n = ghost_row[0] || ghost_row[1] || ghost_row[2] ? p.size() : p.n_owned();
+  near_row.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    near_row[i] = takes_part[i] && (i < p.n_owned() || ghost_row[static_cast<std::size_t>(roles[i])]);
   // The wide list's rows (fluid particles) hold their near rows when the wide radius covers the near one plus
   // both particles' moves since it was built: predict moved the fluid particles (owned and ghosts) by dt v.
   bool reuse = false;

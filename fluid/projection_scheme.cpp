@@ -104,6 +104,7 @@ class ProjectionScheme final : public PressureScheme {
     linear_source = initial_step();
     // The first solve on the positions before the step moved them.
     projection_geometry(linear_source ? start_position : p.position);
+    // Of the fluid ghosts only: the others' values are 0 at their owners, and so at the ghosts copied from them.
     core.refresh_ghosts({surface_pressure_field}, report, ParticleKind::fluid);
     surface_pressure = &p.scalar_field(surface_pressure_field);
     rows_ready = false;
@@ -610,7 +611,7 @@ class ProjectionScheme final : public PressureScheme {
     const Real w_tolerance = 1e-9 * projection_source * n0_kernel;  // a relative density change of 1e-9
     auto& trial_dv = p.vector_field(trial_dv_field);
     if (additions) {
-      correction_velocities(dt, p.n_owned(), trial_dv);
+      correction_velocities(dt, p.n_owned(), trial_dv);  // 0 for the others: the fluid ghosts' alone are sent
       core.refresh_ghosts({trial_dv_field}, report, ParticleKind::fluid);
     }
     int changed = 0;
