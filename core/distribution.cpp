@@ -4,6 +4,7 @@
 #include "core/distribution.hpp"
 
 #include "core/binary_io.hpp"
+#include "core/collectives.hpp"
 #include "core/stopwatch.hpp"
 
 #include <Kokkos_Core.hpp>
@@ -285,10 +286,74 @@ bool extend_to_infinity(std::vector<Box>& boxes) {
   return true;
 }
 
+/// Each cut, a face coordinate c along an axis that boxes share (hi = c below it, lo = c above), moves into a
+/// gap between the points on its two sides within `reach` of it (over all ranks): Zoltan2 places a cut at the
+/// coordinate that splits the weight, which on a lattice lies within a plane of points, and the plane's points
+/// then cross it as soon as they move a little. Of the gaps at least half as wide as the widest within reach,
+/// the cut takes the middle of the one that moves the least weight across it. Collective.
+void centre_cuts(MPI_Comm comm, std::vector<Box>& boxes, const Vec* x, const Real* w, const std::size_t n,
+                 const Real reach) {
+  if (!(reach > 0)) return;
+  struct Cut {
+    int axis;
+    Real c;
+  };
+  std::vector<Cut> cuts;
+  for (const Box& b : boxes)
+    for (int a = 0; a < dim && !is_empty(b); ++a)
+      if (std::isfinite(b.hi[a]) &&
+          std::none_of(cuts.begin(), cuts.end(), [&](const Cut& k) { return k.axis == a && k.c == b.hi[a]; }))
+        cuts.push_back({a, b.hi[a]});
+  if (cuts.empty()) return;
+  // Per cut, the points within reach in a box on either side of it: (cut, coordinate, weight).
+  std::vector<Real> mine;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto in = std::find_if(boxes.begin(), boxes.end(), [&](const Box& b) { return b.contains(x[i]); });
+    if (in == boxes.end()) continue;
+    for (std::size_t k = 0; k < cuts.size(); ++k) {
+      const int a = cuts[k].axis;
+      if ((in->hi[a] == cuts[k].c || in->lo[a] == cuts[k].c) && std::abs(x[i][a] - cuts[k].c) <= reach)
+        mine.insert(mine.end(), {static_cast<Real>(k), x[i][a], w ? w[i] : 1.0});
+    }
+  }
+  const std::vector<Real> all = all_gather(comm, mine);
+  for (std::size_t k = 0; k < cuts.size(); ++k) {
+    std::vector<std::pair<Real, Real>> near;  // coordinate, weight
+    for (std::size_t q = 0; q + 2 < all.size(); q += 3)
+      if (static_cast<std::size_t>(all[q]) == k) near.emplace_back(all[q + 1], all[q + 2]);
+    if (near.size() < 2) continue;
+    std::sort(near.begin(), near.end());
+    const Real c = cuts[k].c;
+    Real widest = 0;
+    for (std::size_t q = 0; q + 1 < near.size(); ++q) widest = std::max(widest, near[q + 1].first - near[q].first);
+    if (!(widest > 0)) continue;
+    // The weight below the cut, and below each gap: the weight a gap's middle moves across the cut.
+    Real below_cut = 0;
+    for (const auto& [xq, wq] : near) below_cut += xq < c ? wq : 0;
+    Real below = 0, best_moved = std::numeric_limits<Real>::infinity(), best = c;
+    for (std::size_t q = 0; q + 1 < near.size(); ++q) {
+      below += near[q].second;
+      if (near[q + 1].first - near[q].first < 0.5 * widest) continue;
+      const Real moved = std::abs(below - below_cut);
+      if (moved < best_moved) {
+        best_moved = moved;
+        best = 0.5 * (near[q].first + near[q + 1].first);
+      }
+    }
+    const int a = cuts[k].axis;
+    for (Box& b : boxes) {
+      if (is_empty(b)) continue;
+      if (b.hi[a] == c) b.hi[a] = best;
+      if (b.lo[a] == c) b.lo[a] = best;
+    }
+  }
+}
+
 /// Regions from Zoltan2 on the points given by each rank, or (no points at all, or a degenerate partition
-/// whose boxes cannot tile space) rank 0 owning all space. Collective.
+/// whose boxes cannot tile space) rank 0 owning all space; the cuts moved into gaps between the points within
+/// `reach` (centre_cuts). Collective.
 std::vector<Box> compute_regions(MPI_Comm comm, const int n_ranks, const PartitionMethod method, const Vec* x,
-                                 const GlobalId* gid, const Real* w, const std::size_t n) {
+                                 const GlobalId* gid, const Real* w, const std::size_t n, const Real reach) {
   std::vector<Box> fallback(static_cast<std::size_t>(n_ranks), empty_box());
   fallback[0] = all_space();
   if (n_ranks == 1) return fallback;
@@ -297,6 +362,7 @@ std::vector<Box> compute_regions(MPI_Comm comm, const int n_ranks, const Partiti
   if (total == 0) return fallback;
   std::vector<Box> boxes = zoltan_boxes(comm, n_ranks, method, x, gid, w, n);
   if (!extend_to_infinity(boxes)) return fallback;
+  centre_cuts(comm, boxes, x, w, n, reach);
   return boxes;
 }
 
@@ -321,7 +387,7 @@ void Distribution::partition(ParticleSet& p, const std::vector<Real>& weights) {
   check_positions(impl_->comm, p, n);
   check_weights(impl_->comm, p, weights, 0, n);
   regions_ = compute_regions(impl_->comm, n_ranks_, settings_.method, p.position.data(), p.global_id.data(),
-                                     weights.empty() ? nullptr : weights.data(), n);
+                             weights.empty() ? nullptr : weights.data(), n, settings_.skin);
   ++stats_.n_partitions;
   stats_.t_partition += seconds_since(t0);
   migrate(p);
@@ -346,8 +412,8 @@ void Distribution::distribute_replicated(ParticleSet& p, const std::vector<Real>
   const auto first = static_cast<std::size_t>(r * n_all / P), last = static_cast<std::size_t>((r + 1) * n_all / P);
   if (!weights.empty()) check_weights(impl_->comm, p, weights, 0, n_all);
   regions_ = compute_regions(impl_->comm, n_ranks_, settings_.method, p.position.data() + first,
-                                     p.global_id.data() + first, weights.empty() ? nullptr : weights.data() + first,
-                                     last - first);
+                             p.global_id.data() + first, weights.empty() ? nullptr : weights.data() + first,
+                             last - first, settings_.skin);
   ++stats_.n_partitions;
   if (n_ranks_ > 1) {
     std::vector<std::uint8_t> remove(n_all);

@@ -454,7 +454,7 @@ class RunLoop {
 
   /// The partition weights of the first n particles: their work in a fluid step (fluid_work_weights; solid
   /// particles 1).
-  std::vector<Real> work_weights(const std::size_t n) const { return fluid_work_weights(p_, n); }
+  std::vector<Real> work_weights(const std::size_t n) const { return fluid_work_weights(p_, n, comm_); }
 
   /// Steps between checks of the owned work's balance (re-partition above the threshold).
   static constexpr std::size_t repartition_every = 20;

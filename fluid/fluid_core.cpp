@@ -92,6 +92,7 @@ FluidCore::FluidCore(const FluidSetup& setup, ParticleSet& particles, Distributi
   p.add_scalar_field(fluid_fields::pressure, 0.0);
   p.add_scalar_field(fluid_fields::free_surface, 0.0);
   p.add_scalar_field(near_fluid_field, 1.0);
+  p.add_scalar_field(work_field, 0.0);
   if (opt.coupled_solid) {
     for (const char* name : {solid_surface_field, solid_reference_field, solid_offset_field}) p.add_scalar_field(name, 0.0);
     for (const char* name : {solid_x_field, solid_v_field}) p.add_vector_field(name);
@@ -280,6 +281,16 @@ double FluidCore::leave_out_far_walls(const Real reach, const Real dt) {
   for (std::size_t i = 0; i < n; ++i)
     if (is_wall(i) && near_fluid[i] == 0) roles[i] = Role::none;
   return t_halo;
+}
+
+void FluidCore::note_work() {
+  auto& work = p.scalar_field(work_field);
+  const std::size_t n = p.n_owned();
+  const std::size_t n_near = std::min(n, near.n_particles()), n_wide = std::min(n, nl.n_particles());
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t pairs = (i < n_near ? near.count(i) : 0) + (i < n_wide ? nl.count(i) : 0);
+    work[i] = roles[i] == Role::none ? 0.0 : static_cast<Real>(pairs);
+  }
 }
 
 /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own.

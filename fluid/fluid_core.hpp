@@ -81,6 +81,12 @@ struct FluidCore {
   /// soon as one of them needs it, so that the ranks' rows agree; a rank without fluid keeps its walls. Returns
   /// the halo time [s].
   double leave_out_far_walls(Real reach, Real dt);
+  /// The particle field that holds each owned particle's neighbours in the step's near and wide lists (0 for a
+  /// particle that took no part, and before the first step): the partition's measure of its work
+  /// (fluid_work_weights).
+  static constexpr const char* work_field = "_fluid_work";
+  /// After build_near_list: work_field of the owned particles from their rows in both lists.
+  void note_work();
   /// Walls and their dummy layers follow the tank motion (rotation about the pivot, v = omega x r) or their own
   /// (core/wall_motion.hpp), to their place and velocity at t.
   void move_walls(Real t);

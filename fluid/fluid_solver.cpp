@@ -57,11 +57,34 @@ Real fluid_work_weight(const ParticleKind kind, const bool takes_part) {
   return 1.0;
 }
 
-std::vector<Real> fluid_work_weights(const ParticleSet& p, const std::size_t n) {
-  const std::vector<Real>* marks =
-      p.has_scalar_field(fluid_detail::FluidCore::near_fluid_field) ? &p.scalar_field(fluid_detail::FluidCore::near_fluid_field) : nullptr;
+std::vector<Real> fluid_work_weights(const ParticleSet& p, const std::size_t n, MPI_Comm comm) {
+  using fluid_detail::FluidCore;
+  const std::vector<Real>* marks = p.has_scalar_field(FluidCore::near_fluid_field) ? &p.scalar_field(FluidCore::near_fluid_field) : nullptr;
+  const std::vector<Real>* work = p.has_scalar_field(FluidCore::work_field) ? &p.scalar_field(FluidCore::work_field) : nullptr;
   std::vector<Real> w(n);
   for (std::size_t i = 0; i < n; ++i) w[i] = fluid_work_weight(p.kind[i], !marks || (*marks)[i] != 0);
+  if (!work) return w;
+  // Within each of the kinds fluid, wall and dummy a particle's weight scales with its pairs against the mean
+  // of its kind over all ranks (integer sums: the same on any number of ranks), so that each kind's total is
+  // what the kind weights give and the rows' lengths (an interior against a free surface, a wall corner) move
+  // the cut; a particle without pairs (no step yet, or left out) keeps its kind's weight.
+  constexpr int n_kinds = 3;
+  const auto scaled = [&](const std::size_t i) {
+    const int k = static_cast<int>(p.kind[i]);
+    return k < n_kinds && (*work)[i] > 0 ? k : -1;
+  };
+  static_assert(static_cast<int>(ParticleKind::fluid) < n_kinds && static_cast<int>(ParticleKind::wall) < n_kinds &&
+                static_cast<int>(ParticleKind::dummy) < n_kinds);
+  unsigned long long sums[2 * n_kinds] = {};  // pairs, then particles, by kind
+  for (std::size_t i = 0; i < n; ++i)
+    if (const int k = scaled(i); k >= 0) {
+      sums[k] += static_cast<unsigned long long>((*work)[i]);
+      ++sums[n_kinds + k];
+    }
+  MPI_Allreduce(MPI_IN_PLACE, sums, 2 * n_kinds, MPI_UNSIGNED_LONG_LONG, MPI_SUM, comm);
+  for (std::size_t i = 0; i < n; ++i)
+    if (const int k = scaled(i); k >= 0 && sums[k] > 0)
+      w[i] *= (*work)[i] * static_cast<Real>(sums[n_kinds + k]) / static_cast<Real>(sums[k]);
   return w;
 }
 
@@ -186,6 +209,7 @@ FluidStepReport FluidSolver::advance(const Real t, const Real dt) {
   m.build_near_list(m.scheme->near_radius(), ghost_needs_row, dt);
   report.t_neighbours += seconds_since(t0);
   t0 = Clock::now();
+  m.note_work();
   m.collide(dt);
   report.t_rest += seconds_since(t0);
   m.refresh_ghosts({"position", "velocity"}, report);

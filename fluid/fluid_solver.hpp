@@ -85,8 +85,10 @@ Real fluid_interaction_radius(const FluidSetup& setup);
 /// `takes_part` false) costs little.
 Real fluid_work_weight(ParticleKind kind, bool takes_part = true);
 /// fluid_work_weight of the first n particles of p, with the marks of the last fluid step where p has them (a
-/// set the fluid has not stepped yet: every particle takes part).
-std::vector<Real> fluid_work_weights(const ParticleSet& p, std::size_t n);
+/// set the fluid has not stepped yet: every particle takes part); where the last step counted each particle's
+/// pairs, a fluid, wall or dummy particle's weight scales with its pairs against its kind's mean over the ranks
+/// of comm (a collective; with p replicated on every rank, the means are the same).
+std::vector<Real> fluid_work_weights(const ParticleSet& p, std::size_t n, MPI_Comm comm);
 
 /// The projection's force on fluid particle k, -(1/rho)(d/C) sum_i p_i dn_i/dx_k = -(1/rho)(d/C) sum_j (p_k + p_j)
 /// dn_j/dx_k, holds the whole pressure, not a difference of pressures: a particle displaced by xi from its

@@ -407,6 +407,48 @@ TEST_P(DistributionMethod, ImbalanceAndRepartition) {
   EXPECT_LT(d.imbalance(p, wp), 0.05);
 }
 
+TEST_P(DistributionMethod, CutsLieInTheGapsBetweenLatticePlanes) {
+  // A jittered lattice (every plane fuzzed by +-0.025 dp): with a skin, every cut lies at least 0.45 dp from the
+  // points on either side of it (the gaps between planes are at least 0.95 dp wide), so that no plane lies on a
+  // cut, wherever Zoltan2 put it. One plane across x dropped: 59 planes, so that an even split lies within one.
+  ParticleSet all = lattice();
+  {
+    std::vector<std::uint8_t> first_plane(all.size());
+    for (std::size_t i = 0; i < all.size(); ++i) first_plane[i] = all.position[i][0] < 0.5 * dp;
+    all.remove_if(first_plane);
+  }
+  {
+    DistributionSettings s = settings(GetParam());
+    s.skin = 2 * dp;
+    Distribution d(world, s);
+    ParticleSet p = all;
+    d.distribute_replicated(p);
+    std::size_t near_a_cut = 0, n_cuts = 0;
+    for (const Box& b : d.regions())
+      for (int a = 0; a < dim; ++a) {
+        if (!std::isfinite(b.hi[a]) || !(b.lo[a] <= b.hi[a])) continue;
+        ++n_cuts;
+        for (const Vec& x : all.position) {
+          bool beside = true;  // within the face's extent on the other axes
+          for (int e = 0; e < dim; ++e) beside &= e == a || (b.lo[e] <= x[e] && x[e] < b.hi[e]);
+          near_a_cut += beside && std::abs(x[a] - b.hi[a]) < 0.45 * dp;
+        }
+      }
+    if (world_size() == 1) {
+      EXPECT_EQ(n_cuts, 0u);
+    } else {
+      EXPECT_GT(n_cuts, 0u);
+      EXPECT_EQ(near_a_cut, 0u) << "points closer than 0.45 dp to one of " << n_cuts << " cuts";
+      // Every particle owned once; each cut moved by less than a plane (a plane across x or y holds at most 1/40
+      // of the block's points).
+      auto ids = all_gather(owned_ids(p));
+      std::sort(ids.begin(), ids.end());
+      EXPECT_EQ(ids, std::vector<GlobalId>(all.global_id.begin(), all.global_id.end()));
+      EXPECT_LT(d.imbalance(p), 0.05 + world_size() / 40.0);
+    }
+  }
+}
+
 TEST(Distribution, NonFinitePositionIsRefusedOnEveryRankNamingTheParticle) {
   Distribution d(world, settings(PartitionMethod::rcb));
   ParticleSet p = lattice();

@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
       if (s == 1 && n_ranks > 1) {
         // As the run loop's balance check does: the weights now count the walls that take part.
         const auto tb = std::chrono::steady_clock::now();
-        const std::vector<Real> w = fluid_work_weights(p, p.n_owned());
+        const std::vector<Real> w = fluid_work_weights(p, p.n_owned(), MPI_COMM_WORLD);
         if (dist.imbalance(p, w) > spec.parallel.imbalance) dist.partition(p, w);
         t_balance = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
       }
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
     const double ms = 1e3 / n_steps;
     {  // each rank's share at the end: what the partition weighs (fluid_work_weights) against what it costs
       constexpr int n_counts = 14;
-      const std::vector<Real> w = fluid_work_weights(p, p.n_owned());
+      const std::vector<Real> w = fluid_work_weights(p, p.n_owned(), MPI_COMM_WORLD);
       // owned: all, fluid, wall, dummy; pressure rows of fluid and of walls; walls and dummies that took part in
       // the last step; the weight; ghosts: fluid, wall, dummy; the matrix's entries and its single-entry rows
       unsigned long long mine[n_counts] = {p.n_owned()};

@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
         failures += !ordered;
       }
       if (step == 4) {
-        world.partition(pd, fluid_work_weights(pd, pd.n_owned()));
+        world.partition(pd, fluid_work_weights(pd, pd.n_owned(), MPI_COMM_WORLD));
         moved = world.stats().n_migrated_out;
         MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
       }
