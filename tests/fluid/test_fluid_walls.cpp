@@ -299,3 +299,40 @@ TEST(Walls, WallsFarFromTheWaterTakeNoPartAndChangeNothing) {
   EXPECT_LT(dp_max, 1e-8 * p_max);
   EXPECT_LT(dx_max, 1e-12);
 }
+
+// The partition's weights after a fluid step (fluid_work_weights): each of the kinds fluid, wall and dummy keeps
+// its total (the kind weight times the particles that take part), and within the fluid a particle at the free
+// surface, with fewer pairs than one in the interior, weighs less; before any step the kind weights alone.
+TEST(FluidWorkWeights, PairsMoveWeightWithinAKindAndKeepItsTotal) {
+  const std::string file = dim == 2 ? "/cases/hydrostatic.yaml" : "/cases/3d/hydrostatic.yaml";
+  const CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + file, {"dp=0.01"});
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), p, dist};
+  const std::vector<Real> before = fluid_work_weights(p, p.n_owned(), MPI_COMM_SELF);
+  for (std::size_t i = 0; i < p.n_owned(); ++i) ASSERT_EQ(before[i], fluid_work_weight(p.kind[i])) << i;
+  fluid.advance(0, fluid.stable_dt());
+  const std::vector<Real> w = fluid_work_weights(p, p.n_owned(), MPI_COMM_SELF);
+  const std::vector<Real> kind_only = [&] {  // the kind weights with the step's marks of the walls left out
+    std::vector<Real> k(p.n_owned());
+    const auto& marks = p.scalar_field("_fluid_near_fluid");
+    for (std::size_t i = 0; i < k.size(); ++i) k[i] = fluid_work_weight(p.kind[i], marks[i] != 0);
+    return k;
+  }();
+  Real total[3] = {}, expected[3] = {};
+  Real surface_max = 0, interior_max = 0;
+  const auto& surface = p.scalar_field(fluid_fields::free_surface);
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    const auto k = static_cast<std::size_t>(p.kind[i]);
+    ASSERT_LT(k, 3u);
+    total[k] += w[i];
+    expected[k] += kind_only[i];
+    if (p.kind[i] != ParticleKind::fluid) continue;
+    Real& largest = surface[i] != 0 ? surface_max : interior_max;
+    largest = std::max(largest, w[i]);
+  }
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(total[k], expected[k], 1e-9 * expected[k]) << "kind " << k;
+  EXPECT_GT(interior_max, 1.0);
+  EXPECT_LT(surface_max, interior_max);
+}
