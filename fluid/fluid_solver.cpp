@@ -57,6 +57,12 @@ Real fluid_work_weight(const ParticleKind kind, const bool takes_part) {
   return 1.0;
 }
 
+bool fluid_takes_part(const ParticleSet& p, const std::size_t i) {
+  using fluid_detail::FluidCore;
+  if (p.kind[i] != ParticleKind::wall && p.kind[i] != ParticleKind::dummy) return true;
+  return !p.has_scalar_field(FluidCore::near_fluid_field) || p.scalar_field(FluidCore::near_fluid_field)[i] != 0;
+}
+
 std::vector<Real> fluid_work_weights(const ParticleSet& p, const std::size_t n, MPI_Comm comm) {
   using fluid_detail::FluidCore;
   const std::vector<Real>* marks = p.has_scalar_field(FluidCore::near_fluid_field) ? &p.scalar_field(FluidCore::near_fluid_field) : nullptr;

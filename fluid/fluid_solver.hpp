@@ -84,6 +84,9 @@ Real fluid_interaction_radius(const FluidSetup& setup);
 /// Other kinds: 1. A wall or dummy particle that took no part in the last fluid step (far from the fluid,
 /// `takes_part` false) costs little.
 Real fluid_work_weight(ParticleKind kind, bool takes_part = true);
+/// Whether particle i of p took part in the last fluid step: every particle but a wall or dummy particle that
+/// the last step left out, far from the fluid (every particle of a set the fluid has not stepped yet).
+bool fluid_takes_part(const ParticleSet& p, std::size_t i);
 /// fluid_work_weight of the first n particles of p, with the marks of the last fluid step where p has them (a
 /// set the fluid has not stepped yet: every particle takes part); where the last step counted each particle's
 /// pairs, a fluid, wall or dummy particle's weight scales with its pairs against its kind's mean over the ranks

@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < p.n_owned(); ++i) {
         const int kind = std::min(2, static_cast<int>(p.kind[i]));
         ++mine[1 + kind];
-        if (kind > 0 && w[i] > fluid_work_weight(p.kind[i], false)) ++mine[5 + kind];
+        if (kind > 0 && fluid_takes_part(p, i)) ++mine[5 + kind];
       }
       for (const LocalIndex r : fluid.row_particles())  // the last step's pressure rows: fluid and wall particles
         ++mine[p.kind[static_cast<std::size_t>(r)] == ParticleKind::fluid ? 4 : 5];

@@ -311,13 +311,15 @@ TEST(FluidWorkWeights, PairsMoveWeightWithinAKindAndKeepItsTotal) {
   Distribution dist{MPI_COMM_SELF, {}};
   FluidSolver fluid{fluid_setup(spec), p, dist};
   const std::vector<Real> before = fluid_work_weights(p, p.n_owned(), MPI_COMM_SELF);
-  for (std::size_t i = 0; i < p.n_owned(); ++i) ASSERT_EQ(before[i], fluid_work_weight(p.kind[i])) << i;
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    ASSERT_EQ(before[i], fluid_work_weight(p.kind[i])) << i;
+    ASSERT_TRUE(fluid_takes_part(p, i)) << i;
+  }
   fluid.advance(0, fluid.stable_dt());
   const std::vector<Real> w = fluid_work_weights(p, p.n_owned(), MPI_COMM_SELF);
   const std::vector<Real> kind_only = [&] {  // the kind weights with the step's marks of the walls left out
     std::vector<Real> k(p.n_owned());
-    const auto& marks = p.scalar_field("_fluid_near_fluid");
-    for (std::size_t i = 0; i < k.size(); ++i) k[i] = fluid_work_weight(p.kind[i], marks[i] != 0);
+    for (std::size_t i = 0; i < k.size(); ++i) k[i] = fluid_work_weight(p.kind[i], fluid_takes_part(p, i));
     return k;
   }();
   Real total[3] = {}, expected[3] = {};
