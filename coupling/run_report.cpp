@@ -160,7 +160,7 @@ std::string format_summary(const RunSummary& s) {
                         static_cast<double>(s.coupling_iterations) / static_cast<double>(s.coupling_windows),
                         s.coupling_iterations_max, s.n_unconverged);
   if (s.n_put_back > 0)
-    text += fmt::format("\n  {} time(s) a fluid particle ended a step inside a wall and was put back on its surface",
+    text += fmt::format("\n  {} time(s) a fluid particle ended a step inside a wall and was put back out of it",
                         s.n_put_back);
   if (s.n_removed > 0) text += fmt::format("\n  {} fluid particles left the domain and were removed", s.n_removed);
   text += "\n  series " + s.pvd_path;

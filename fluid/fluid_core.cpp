@@ -500,7 +500,9 @@ struct WallCell {
 /// A wall or dummy particle j stands for the lattice cell of side dp around it (the wall's solid region is the union
 /// of these cells); a fluid particle i inside one or on its boundary (|x_i - x_j| <= dp/2 along each of the tank's
 /// axes: a particle on a face that another wall body covers is still in that body's cells) is moved along
-/// the cell's offset s_j to the wetted surface, to the plane through x_j + s_j normal to s_j. Of the cells that hold
+/// the cell's offset s_j to the wetted surface, past the plane through x_j + s_j normal to s_j by the restitution's
+/// share of its depth behind it (a bounce: the position is reflected as the velocity is, so that particles put back
+/// into a concave corner between two walls do not all land on the corner's point or edge). Of the cells that hold
 /// it the one it is deepest in is taken (then the lowest global id), so that the result does not depend on the
 /// order of the neighbours (on the number of ranks). A particle in a corner cell may land in a neighbouring cell:
 /// up to `passes` cells are handled in turn.
@@ -583,7 +585,7 @@ std::size_t FluidCore::keep_out_of_walls() {
     if (roles[i] != Role::fluid) continue;
     int pass = 0;
     for (WallCell cell = deepest_cell(i); cell.particle != none && pass < passes; cell = deepest_cell(i), ++pass) {
-      p.position[i] += cell.depth * cell.normal;
+      p.position[i] += (1 + opt.restitution) * cell.depth * cell.normal;
       const Real approach = (p.velocity[i] - p.velocity[cell.particle]).dot(cell.normal);
       if (approach < 0) p.velocity[i] -= (1 + opt.restitution) * approach * cell.normal;
     }

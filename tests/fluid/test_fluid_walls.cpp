@@ -14,6 +14,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -30,6 +31,7 @@ struct Thrown {
   std::size_t n_inside = 0;    ///< fluid particles found inside a wall after a step (all steps)
   std::size_t n_put_back = 0;  ///< the solver's count
   Real deepest = 0;            ///< the largest depth past the tank's inner faces [m]
+  Real closest = std::numeric_limits<Real>::infinity();  ///< the closest pair of fluid particles near a face [dp]
 };
 
 /// The hydrostatic case (dp 1 cm) without gravity, its water thrown at `speed` into the tank's lower corner at the
@@ -80,6 +82,16 @@ Thrown throw_into_corner(const std::string& scheme, const Real speed, const int 
       out.deepest = std::max(out.deepest, depth);
       if (depth > 1e-9) ++out.n_inside;
     }
+    // Particles put back into a corner must not land on one point: the closest pair within dp of a face.
+    std::vector<Vec> near_faces;
+    for (std::size_t i = 0; i < p.n_owned(); ++i) {
+      if (p.kind[i] != ParticleKind::fluid) continue;
+      const Vec x = motion.to_tank_frame(p.position[i], tilt);
+      if (std::min((x - inner.lo).minCoeff(), (inner.hi - x).minCoeff()) < spec.dp) near_faces.push_back(x);
+    }
+    for (std::size_t a = 0; a < near_faces.size(); ++a)
+      for (std::size_t b = a + 1; b < near_faces.size(); ++b)
+        out.closest = std::min(out.closest, (near_faces[a] - near_faces[b]).norm() / spec.dp);
   }
   return out;
 }
@@ -91,13 +103,67 @@ TEST(Walls, WaterThrownIntoACornerStaysInTheTank) {
     const Thrown t = throw_into_corner(scheme, 3.0, 40);
     EXPECT_EQ(t.n_inside, 0u) << scheme << ": deepest " << t.deepest << " m";
     EXPECT_GT(t.n_put_back, 0u) << scheme;
+    EXPECT_GT(t.closest, 0.01) << scheme << ": particles put back onto one point";
   }
+}
+
+// Two fluid particles inside the walls in the corner between the floor and a block standing on it (two wall
+// bodies), behind both faces, are put back (a step so short that nothing else moves them): each goes back in
+// front of the faces, and they stay apart, not both onto the corner (where the kernel's 1/r would throw them
+// apart at the next step).
+TEST(Walls, ParticlesPutBackIntoTheCornerOfTwoWallsStayApart) {
+  const std::string file = dim == 2 ? "/cases/hydrostatic.yaml" : "/cases/3d/hydrostatic.yaml";
+  const std::string walls =
+      dim == 2 ? "walls=[{name: box, type: box, rectangle: {min: [0, 0], max: [0.2, 0.3]}, open_top: true}, "
+                 "{name: step, type: block, rectangle: {min: [0.1, 0], max: [0.14, 0.05]}}]"
+               : "walls=[{name: box, type: box, rectangle: {min: [0, 0, 0], max: [0.2, 0.1, 0.3]}, open_top: true}, "
+                 "{name: step, type: block, rectangle: {min: [0.1, 0, 0], max: [0.14, 0.1, 0.05]}}]";
+  CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + file,
+                            {dim == 2 ? "gravity=[0,0]" : "gravity=[0,0,0]", "dp=0.01", "bodies.water.subtract=[step]",
+                             walls});
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  const Real dp = spec.dp;
+  // The corner where the block's left face meets the floor (in 3D an edge along y: a point of it mid-depth).
+  Vec corner = Vec::Zero();
+  corner[0] = 0.1;
+  if (dim == 3) corner[1] = 0.045;
+  // The two fluid particles nearest that corner, moved behind both faces.
+  std::vector<std::size_t> fluid;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.kind[i] == ParticleKind::fluid) fluid.push_back(i);
+  std::partial_sort(fluid.begin(), fluid.begin() + 2, fluid.end(), [&](const std::size_t a, const std::size_t b) {
+    return (p.position[a] - corner).squaredNorm() < (p.position[b] - corner).squaredNorm();
+  });
+  const std::size_t a = fluid[0], b = fluid[1];
+  p.position[a] = p.position[b] = corner;
+  p.position[a][0] += 0.2 * dp;
+  p.position[a][dim - 1] -= 0.3 * dp;
+  p.position[b][0] += 0.3 * dp;
+  p.position[b][dim - 1] -= 0.1 * dp;
+  const auto gid_a = p.global_id[a], gid_b = p.global_id[b];
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid_solver{fluid_setup(spec), p, dist};
+  const FluidStepReport r = fluid_solver.advance(0.0, 1e-6);
+  EXPECT_EQ(r.n_put_back, 2u);
+  // The solver may reorder the particles: they are found by global id.
+  Vec xa = Vec::Constant(std::numeric_limits<Real>::quiet_NaN()), xb = xa;
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.global_id[i] == gid_a) xa = p.position[i];
+    if (p.global_id[i] == gid_b) xb = p.position[i];
+  }
+  for (const Vec& x : {xa, xb}) {
+    EXPECT_LE(x[0], corner[0]) << x.transpose();  // in front of the block's face
+    EXPECT_GE(x[dim - 1], 0.0) << x.transpose();  // above the floor
+  }
+  EXPECT_GT((xa - xb).norm(), 0.01 * dp) << xa.transpose() << " and " << xb.transpose();
 }
 
 TEST(Walls, WaterThrownIntoTheCornerOfATiltedTankStaysInTheTank) {
   const Thrown t = throw_into_corner("projection", 3.0, 40, 0.3);
   EXPECT_EQ(t.n_inside, 0u) << "deepest " << t.deepest << " m";
   EXPECT_GT(t.n_put_back, 0u);
+  EXPECT_GT(t.closest, 0.01) << "particles put back onto one point";
 }
 
 namespace {
