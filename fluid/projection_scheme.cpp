@@ -86,16 +86,34 @@ class ProjectionScheme final : public PressureScheme {
   void after_surface() override {
     const std::size_t n = p.n_owned();
     auto& surface = p.scalar_field(fluid_fields::free_surface);
-    // A wall or solid row with no fluid particle within the kernel's reach constrains nothing that moves: it is
-    // a free-surface row (p = 0) and stays one until the water reaches it.
+    // A wall or solid row that no fluid particle reads constrains nothing that moves: it is a free-surface row
+    // (p = 0) and stays one until the water reaches it. A fluid particle reads the rows of its neighbours and
+    // of its dummy neighbours' wall groups (wall_groups: a dummy joins a wall particle among its neighbours), so
+    // a row is wet when a fluid particle is its neighbour or a neighbour of one of its dummy neighbours. Dry
+    // with the first alone, a wall particle a few rows under a thin wall's face (the floor under a beach's toe)
+    // would hold p = 0 in the dummies next to the water, which would flow toward them.
+    // A dry row whose support is full (inside the walls: the floor under a block standing on it) faces no air,
+    // and its p = 0 is no pressure of the water's: it is flagged dry_flag, and the stabilisation leaves its
+    // pairs out (operator_row), as it would pull the wet rows next to it toward 0. A dry row short of
+    // neighbours faces air, whose pressure is 0: it stays an ordinary free-surface row in its neighbours' pairs.
+    const std::size_t n_listed = near.n_particles();
+    const auto has_fluid_neighbour = [&](const std::size_t j) {
+      for (std::size_t q = near.begin(j); q < near.end(j); ++q)
+        if (roles[static_cast<std::size_t>(near.index[q])] == Role::fluid) return true;
+      return false;
+    };
     dry.assign(n, 0);
     for (std::size_t i = 0; i < n; ++i) {
       if (roles[i] != Role::boundary) continue;
-      bool wet = false;
-      for (std::size_t q = near.begin(i); q < near.end(i) && !wet; ++q)
-        wet = roles[static_cast<std::size_t>(near.index[q])] == Role::fluid;
+      bool wet = has_fluid_neighbour(i);
+      if (p.kind[i] == ParticleKind::wall)
+        for (std::size_t q = near.begin(i); q < near.end(i) && !wet; ++q) {
+          const auto m = static_cast<std::size_t>(near.index[q]);
+          if (m < n_listed && p.kind[m] == ParticleKind::dummy && roles[m] == Role::dummy) wet = has_fluid_neighbour(m);
+        }
       dry[i] = !wet;
-      if (!wet) surface[i] = 1;
+      if (!wet) surface[i] = core.n_star[i] >= core.beta1 * lat_g.n0 ? dry_flag : 1;
+      else if (surface[i] == dry_flag) surface[i] = 1;
     }
   }
 
@@ -107,6 +125,7 @@ class ProjectionScheme final : public PressureScheme {
     // Of the fluid ghosts only: the others' values are 0 at their owners, and so at the ghosts copied from them.
     core.refresh_ghosts({surface_pressure_field}, report, ParticleKind::fluid);
     surface_pressure = &p.scalar_field(surface_pressure_field);
+    surface_flag = &p.scalar_field(fluid_fields::free_surface);
     rows_ready = false;
   }
 
@@ -443,6 +462,7 @@ class ProjectionScheme final : public PressureScheme {
           const auto j = static_cast<std::size_t>(near.index[q]);
           const LocalIndex col = column_of_particle[j];
           if (col < 0 || static_cast<std::size_t>(col) == r) continue;
+          if ((*surface_flag)[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(col)])] == dry_flag) continue;
           const Real v = row_lap_scale * (geo.x ? weight(((*geo.x)[a] - (*geo.x)[j]).norm(), re_g) : geo.lap_weight[q]);
           add_laplacian_column(static_cast<std::size_t>(col), -v);
           add_laplacian_column(r, v);
@@ -784,6 +804,8 @@ class ProjectionScheme final : public PressureScheme {
   Geometry geo;                          ///< projection: the geometry of this step's rows and correction
   const std::vector<Real>* surface_pressure = nullptr;  ///< surface_pressure_field, current at the ghosts (prepare)
   std::vector<Real> initial_error;       ///< projection, first step: each row's density error at the start
+  static constexpr Real dry_flag = 2;
+  const std::vector<Real>* surface_flag = nullptr;
   std::vector<std::uint8_t> dry;         ///< projection: a wall or solid row without a fluid neighbour
   std::vector<std::size_t> member_ptr;   ///< projection: each row's group dummies (CSR)
   std::vector<LocalIndex> members;

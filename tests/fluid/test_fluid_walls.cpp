@@ -107,20 +107,32 @@ TEST(Walls, WaterThrownIntoACornerStaysInTheTank) {
   }
 }
 
+namespace {
+
+// The still-water case of this build's dimension (water 0.2 m deep in a box 0.2 m wide, 0.1 m deep in 3D).
+std::string hydrostatic_file() {
+  return std::string(MPSFSI_SOURCE_DIR) + (dim == 2 ? "/cases/hydrostatic.yaml" : "/cases/3d/hydrostatic.yaml");
+}
+
+// A `walls=` override: that case's open box 0.3 m high and a block `step` from x0 to x1, `height` high, standing
+// on its floor across the whole depth.
+std::string tank_with_block(const Real x0, const Real x1, const Real height) {
+  if (dim == 2)
+    return fmt::format("walls=[{{name: box, type: box, rectangle: {{min: [0, 0], max: [0.2, 0.3]}}, open_top: true}}, "
+                       "{{name: step, type: block, rectangle: {{min: [{}, 0], max: [{}, {}]}}}}]", x0, x1, height);
+  return fmt::format("walls=[{{name: box, type: box, rectangle: {{min: [0, 0, 0], max: [0.2, 0.1, 0.3]}}, open_top: true}}, "
+                     "{{name: step, type: block, rectangle: {{min: [{}, 0, 0], max: [{}, 0.1, {}]}}}}]", x0, x1, height);
+}
+
+}  // namespace
+
 // Two fluid particles inside the walls in the corner between the floor and a block standing on it (two wall
 // bodies), behind both faces, are put back (a step so short that nothing else moves them): each goes back in
 // front of the faces, and they stay apart, not both onto the corner (where the kernel's 1/r would throw them
 // apart at the next step).
 TEST(Walls, ParticlesPutBackIntoTheCornerOfTwoWallsStayApart) {
-  const std::string file = dim == 2 ? "/cases/hydrostatic.yaml" : "/cases/3d/hydrostatic.yaml";
-  const std::string walls =
-      dim == 2 ? "walls=[{name: box, type: box, rectangle: {min: [0, 0], max: [0.2, 0.3]}, open_top: true}, "
-                 "{name: step, type: block, rectangle: {min: [0.1, 0], max: [0.14, 0.05]}}]"
-               : "walls=[{name: box, type: box, rectangle: {min: [0, 0, 0], max: [0.2, 0.1, 0.3]}, open_top: true}, "
-                 "{name: step, type: block, rectangle: {min: [0.1, 0, 0], max: [0.14, 0.1, 0.05]}}]";
-  CaseSpec spec = load_case(std::string(MPSFSI_SOURCE_DIR) + file,
-                            {dim == 2 ? "gravity=[0,0]" : "gravity=[0,0,0]", "dp=0.01", "bodies.water.subtract=[step]",
-                             walls});
+  CaseSpec spec = load_case(hydrostatic_file(), {dim == 2 ? "gravity=[0,0]" : "gravity=[0,0,0]", "dp=0.01",
+                                                 "bodies.water.subtract=[step]", tank_with_block(0.1, 0.14, 0.05)});
   Scene scene = build_scene(spec);
   ParticleSet& p = scene.particles;
   const Real dp = spec.dp;
@@ -157,6 +169,38 @@ TEST(Walls, ParticlesPutBackIntoTheCornerOfTwoWallsStayApart) {
     EXPECT_GE(x[dim - 1], 0.0) << x.transpose();  // above the floor
   }
   EXPECT_GT((xa - xb).norm(), 0.01 * dp) << xa.transpose() << " and " << xb.transpose();
+}
+
+// Water at rest around a block 10 dp wide standing on the floor (two wall bodies). The floor's wall particles
+// under the block's middle are dry: no fluid particle reads their rows, which hold p = 0. Their pressure must
+// not reach the water, neither through the dummies of their wall groups nor through the stabilisation's pairs
+// with the block's wet rows (that would make the block's foot a sink: the water around it flows toward it).
+// After 50 steps of 1 ms the water is at rest at the hydrostatic pressure.
+TEST(Walls, WaterAtRestAroundABlockOnTheFloorStaysAtRest) {
+  const CaseSpec spec = load_case(hydrostatic_file(), {"dp=0.01", "fluid.scheme=projection", "materials.water.c=1000",
+                                                       "materials.water.kappa=1", "bodies.water.subtract=[step]",
+                                                       tank_with_block(0.05, 0.15, 0.06)});
+  Scene scene = build_scene(spec);
+  ParticleSet& p = scene.particles;
+  Distribution dist{MPI_COMM_SELF, {}};
+  FluidSolver fluid{fluid_setup(spec), p, dist};
+  for (int step = 0; step < 50; ++step) fluid.advance(step * 1e-3, 1e-3);
+  const Real h = 0.2, g = 9.81, rho = 1000;
+  const auto& pressure = p.scalar_field("pressure");
+  Real v_max = 0, error = 0;
+  std::size_t n_checked = 0;
+  for (std::size_t i = 0; i < p.n_owned(); ++i) {
+    if (p.kind[i] != ParticleKind::fluid) continue;
+    v_max = std::max(v_max, p.velocity[i].norm());
+    const Real y = p.position[i][dim - 1];
+    if (y > h - 3 * spec.dp) continue;
+    error = std::max(error, std::abs(pressure[i] - rho * g * (h - y)) / (rho * g * h));
+    ++n_checked;
+  }
+  ASSERT_GT(n_checked, 50u);
+  std::printf("  water around a block: largest speed %.4f m/s, largest pressure error %.4f rho g h\n", v_max, error);
+  EXPECT_LT(v_max, 0.005 * std::sqrt(g * h));
+  EXPECT_LT(error, 0.025);
 }
 
 TEST(Walls, WaterThrownIntoTheCornerOfATiltedTankStaysInTheTank) {
