@@ -93,7 +93,7 @@ class ProjectionScheme final : public PressureScheme {
     // with the first alone, a wall particle a few rows under a thin wall's face (the floor under a beach's toe)
     // would hold p = 0 in the dummies next to the water, which would flow toward them.
     // A dry row whose support is full (inside the walls: the floor under a block standing on it) faces no air,
-    // and its p = 0 is no pressure of the water's: it is flagged dry_flag, and the stabilisation leaves its
+    // and its p = 0 is no pressure of the water's: it is flagged inside_flag, and the stabilisation leaves its
     // pairs out (operator_row), as it would pull the wet rows next to it toward 0. A dry row short of
     // neighbours faces air, whose pressure is 0: it stays an ordinary free-surface row in its neighbours' pairs.
     const std::size_t n_listed = near.n_particles();
@@ -112,8 +112,8 @@ class ProjectionScheme final : public PressureScheme {
           if (m < n_listed && p.kind[m] == ParticleKind::dummy && roles[m] == Role::dummy) wet = has_fluid_neighbour(m);
         }
       dry[i] = !wet;
-      if (!wet) surface[i] = core.n_star[i] >= core.beta1 * lat_g.n0 ? dry_flag : 1;
-      else if (surface[i] == dry_flag) surface[i] = 1;
+      if (!wet) surface[i] = core.n_star[i] >= core.beta1 * lat_g.n0 ? inside_flag : 1;
+      else if (surface[i] == inside_flag) surface[i] = 1;
     }
   }
 
@@ -125,7 +125,6 @@ class ProjectionScheme final : public PressureScheme {
     // Of the fluid ghosts only: the others' values are 0 at their owners, and so at the ghosts copied from them.
     core.refresh_ghosts({surface_pressure_field}, report, ParticleKind::fluid);
     surface_pressure = &p.scalar_field(surface_pressure_field);
-    surface_flag = &p.scalar_field(fluid_fields::free_surface);
     rows_ready = false;
   }
 
@@ -373,6 +372,11 @@ class ProjectionScheme final : public PressureScheme {
     column_particle.assign(n_columns, 0);
     for (std::size_t j = 0; j < p.size(); ++j)
       if (row_of[j] >= 0) column_particle[static_cast<std::size_t>(row_of[j])] = static_cast<LocalIndex>(j);
+    // The dry rows inside the walls (after_surface; the flag holds through the step), which the stabilisation's
+    // pairs leave out.
+    const auto& surface = p.scalar_field(fluid_fields::free_surface);
+    column_inside.resize(n_columns);
+    for (std::size_t q = 0; q < n_columns; ++q) column_inside[q] = surface[static_cast<std::size_t>(column_particle[q])] == inside_flag;
     row_scale = (1.0 - step_alpha) * geo.projection_scale / n0_kernel;
     row_lap_scale = step_alpha / (geo.projection_scale * n0_kernel) * (2.0 * dim / (lat_g.lambda * lat_g.n0));
     // The members of each row's wall group (dummies whose parent is the row's particle).
@@ -462,7 +466,7 @@ class ProjectionScheme final : public PressureScheme {
           const auto j = static_cast<std::size_t>(near.index[q]);
           const LocalIndex col = column_of_particle[j];
           if (col < 0 || static_cast<std::size_t>(col) == r) continue;
-          if ((*surface_flag)[static_cast<std::size_t>(column_particle[static_cast<std::size_t>(col)])] == dry_flag) continue;
+          if (column_inside[static_cast<std::size_t>(col)]) continue;
           const Real v = row_lap_scale * (geo.x ? weight(((*geo.x)[a] - (*geo.x)[j]).norm(), re_g) : geo.lap_weight[q]);
           add_laplacian_column(static_cast<std::size_t>(col), -v);
           add_laplacian_column(r, v);
@@ -804,9 +808,8 @@ class ProjectionScheme final : public PressureScheme {
   Geometry geo;                          ///< projection: the geometry of this step's rows and correction
   const std::vector<Real>* surface_pressure = nullptr;  ///< surface_pressure_field, current at the ghosts (prepare)
   std::vector<Real> initial_error;       ///< projection, first step: each row's density error at the start
-  static constexpr Real dry_flag = 2;
-  const std::vector<Real>* surface_flag = nullptr;
-  std::vector<std::uint8_t> dry;         ///< projection: a wall or solid row without a fluid neighbour
+  static constexpr Real inside_flag = 2;  ///< the free-surface flag of a dry row inside the walls (after_surface)
+  std::vector<std::uint8_t> dry;         ///< projection: a wall or solid row that no fluid particle reads
   std::vector<std::size_t> member_ptr;   ///< projection: each row's group dummies (CSR)
   std::vector<LocalIndex> members;
   std::vector<Real> row_error;           ///< projection: each row's density error (with its group's)
@@ -819,6 +822,7 @@ class ProjectionScheme final : public PressureScheme {
   std::vector<Real> row_val;
   Real row_scale = 0, row_lap_scale = 0;    ///< projection: the factors of G and of the stabilisation (prepare_rows)
   std::vector<LocalIndex> column_particle;  ///< projection: the particle of each column
+  std::vector<std::uint8_t> column_inside;  ///< projection: each column's particle is a dry row inside the walls
   bool rows_ready = false;                  ///< prepare_rows done for this step
   /// The first solve's rows take the density change of the step's displacements to first order (prepare_rows):
   /// the error that G's correction removes, so that p0 does not depend on how far dt moves the fluid.
