@@ -92,15 +92,24 @@ class ProjectionScheme final : public PressureScheme {
     // a row is wet when a fluid particle is its neighbour or a neighbour of one of its dummy neighbours. Dry
     // with the first alone, a wall particle a few rows under a thin wall's face (the floor under a beach's toe)
     // would hold p = 0 in the dummies next to the water, which would flow toward them.
-    // A dry row whose support is full (inside the walls: the floor under a block standing on it) faces no air,
-    // and its p = 0 is no pressure of the water's: it is flagged inside_flag, and the stabilisation leaves its
-    // pairs out (operator_row), as it would pull the wet rows next to it toward 0. A dry row short of
+    // A dry wall row whose support is full (inside the walls: the floor under a block standing on it) faces no
+    // air, and its p = 0 is no pressure of the water's: it is flagged inside_flag, and the stabilisation leaves
+    // its pairs out (operator_row), as it would pull the wet rows next to it toward 0. A dry row short of
     // neighbours faces air, whose pressure is 0: it stays an ordinary free-surface row in its neighbours' pairs.
+    // So do a solid's dry rows and the dry wall rows next to a solid (a clamp, a channel beside a block), whose
+    // pairs with the solid's rows the coupled cases were validated with (docs/validation.md, "Water at rest on
+    // walls that rest on walls").
     const std::size_t n_listed = near.n_particles();
     const auto has_fluid_neighbour = [&](const std::size_t j) {
       for (std::size_t q = near.begin(j); q < near.end(j); ++q)
         if (roles[static_cast<std::size_t>(near.index[q])] == Role::fluid) return true;
       return false;
+    };
+    const auto inside_walls = [&](const std::size_t i) {
+      if (p.kind[i] != ParticleKind::wall || core.n_star[i] < core.beta1 * lat_g.n0) return false;
+      for (std::size_t q = near.begin(i); q < near.end(i); ++q)
+        if (p.kind[static_cast<std::size_t>(near.index[q])] == ParticleKind::solid) return false;
+      return true;
     };
     dry.assign(n, 0);
     for (std::size_t i = 0; i < n; ++i) {
@@ -112,7 +121,7 @@ class ProjectionScheme final : public PressureScheme {
           if (m < n_listed && p.kind[m] == ParticleKind::dummy && roles[m] == Role::dummy) wet = has_fluid_neighbour(m);
         }
       dry[i] = !wet;
-      if (!wet) surface[i] = core.n_star[i] >= core.beta1 * lat_g.n0 ? inside_flag : 1;
+      if (!wet) surface[i] = inside_walls(i) ? inside_flag : 1;
       else if (surface[i] == inside_flag) surface[i] = 1;
     }
   }
